@@ -99,7 +99,7 @@ class World {
   ConstPointsRef positions(BodyHandle body) const;
   ConstPointsRef velocities(BodyHandle body) const;
   ConstPointsRef restPositions(BodyHandle body) const;
-  const std::vector<float>& allMasses() const;  // kg, every particle of the world
+  Eigen::VectorXf masses(BodyHandle body) const;  // kg per particle (#P)
   double mass(BodyHandle body) const;           // kg
   Vec3 centreOfMass(BodyHandle body) const;
   Vec3 linearMomentum(BodyHandle body) const;

@@ -1,0 +1,886 @@
+#include "sim/world.h"
+
+#include <Eigen/Dense>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <stdexcept>
+
+#include "sim/cluster_layout.h"
+#include "sim/cluster_rest.h"
+#include "sim/parallel.h"
+#include "sim/plasticity.h"
+#include "sim/shape_matching.h"
+
+namespace sb {
+
+namespace {
+
+using MatX3f = Eigen::Matrix<float, Eigen::Dynamic, 3>;
+using Clock = std::chrono::steady_clock;
+
+constexpr int kMembersPerTask = 8192;    // cluster members per moment task
+constexpr int kParticlesPerBlock = 4096;  // particles per integration/collision block
+constexpr int kMinParallelTasks = 4;
+
+double secondsSince(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+std::string str(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+
+void requireRange(const std::string& field, double v, double lo, double hi) {
+  if (!(v >= lo && v <= hi))
+    throw std::invalid_argument(field + ": must be in [" + str(lo) + ", " + str(hi) + "], got " +
+                                str(v));
+}
+
+void validateParams(const BodyParams& p) {
+  requireRange("alpha", p.alpha, 0.0, 1.0);
+  requireRange("beta", p.beta, 0.0, 1.0);
+  requireRange("damping", p.damping, 0.0, 1.0);
+  requireRange("plasticity.yield", p.plasticity.yield, 0.0, 1e6);
+  requireRange("plasticity.creep", p.plasticity.creep, 0.0, 1e6);
+  requireRange("plasticity.max", p.plasticity.max, 0.0, 1e6);
+}
+
+// A fixed range of one cluster's members whose moments are summed together.
+struct MomentTask {
+  int cluster;
+  int begin, end;  // positions in the cluster-major member list (or particle indices)
+};
+
+// What never changes while a body runs (rebuilt only by setClusters).
+struct BodyModel {
+  std::string name;
+  Vec3 origin = Vec3::Zero();  // world position of the body frame's origin: rest centre of mass
+  MatX3f rest;                 // r: rest positions in the body frame (#P×3, m)
+  Eigen::VectorXf mass;        // #P, kg
+  double totalMass = 0;
+  std::vector<int> pinned;
+  MatX3f startPositions, startVelocities;  // #P×3, the state reset() returns to
+  ClusterDef clusterDef;
+  // Clusters in both directions (CSR): members of cluster c are
+  // members[memberStart[c] .. memberStart[c+1]); clusters of particle i are
+  // particleClusters[particleStart[i] .. particleStart[i+1]), ascending.
+  std::vector<int> memberStart, members;
+  std::vector<int> particleStart, particleClusters;
+  Eigen::VectorXf matchWeight;  // wᵢ = mᵢ / (number of clusters of i): conserves momentum
+  Eigen::VectorXf invCount;     // 1 / (number of clusters of i)
+  std::vector<ClusterRestModel> clusterRest;
+  std::vector<MomentTask> tasks;  // in cluster order
+  std::vector<int> taskStart;     // tasks of cluster c: taskStart[c] .. taskStart[c+1]
+  bool wholeBodyCluster = false;  // exactly one cluster holding every particle in order
+  int clusterCount() const { return static_cast<int>(clusterRest.size()); }
+  int particleCount() const { return static_cast<int>(rest.rows()); }
+};
+
+// What changes every step.
+struct BodyState {
+  MatX3f x, v;  // positions (m) and velocities (m/s), #P×3
+  std::vector<Mat3> plastic;                // Sᵖ per cluster
+  std::vector<ClusterShape> shape;          // derived from Sᵖ
+  std::vector<Eigen::Quaterniond> rotation; // warm start of the rotation extraction
+  std::vector<Eigen::Vector3f> ref;         // last centre of mass: reference for float sums
+  std::vector<GoalTransform> goal;          // per cluster, written by the Goals phase
+};
+
+struct BodySlot {
+  std::uint32_t generation = 0;
+  bool alive = false;
+  std::shared_ptr<const BodyModel> model;
+  BodyParams params;
+  BodyState state;
+};
+
+std::shared_ptr<BodyModel> buildModel(const BodyDef& def, const ClusterDef& clusters,
+                                      std::shared_ptr<const BodyModel> base) {
+  auto m = std::make_shared<BodyModel>();
+  if (base) {  // new clusters for an existing body: keep everything but the clusters
+    *m = *base;
+  } else {
+    const int n = static_cast<int>(def.positions.size());
+    m->name = def.name;
+    m->mass.resize(n);
+    for (int i = 0; i < n; ++i)
+      m->mass[i] = def.masses.empty() ? float(def.totalMass / n) : float(def.masses[size_t(i)]);
+    m->totalMass = 0;
+    Vec3 weighted = Vec3::Zero();
+    for (int i = 0; i < n; ++i) {
+      m->totalMass += m->mass[i];
+      weighted += double(m->mass[i]) * def.positions[size_t(i)];
+    }
+    m->origin = weighted / m->totalMass;
+    m->rest.resize(n, 3);
+    m->startPositions.resize(n, 3);
+    m->startVelocities.resize(n, 3);
+    for (int i = 0; i < n; ++i) {
+      m->rest.row(i) = (def.positions[size_t(i)] - m->origin).transpose().cast<float>();
+      m->startPositions.row(i) = def.positions[size_t(i)].transpose().cast<float>();
+      m->startVelocities.row(i) = def.velocity.transpose().cast<float>();
+    }
+    m->pinned = def.pinned;
+  }
+  m->clusterDef = clusters;
+  std::vector<Vec3> restWorld(static_cast<size_t>(m->particleCount()));
+  for (int i = 0; i < m->particleCount(); ++i)
+    restWorld[size_t(i)] = m->rest.row(i).transpose().cast<double>() + m->origin;
+  const std::vector<std::vector<int>> lists = buildClusterMembers(clusters, restWorld);
+
+  const int n = m->particleCount();
+  const int nc = static_cast<int>(lists.size());
+  m->memberStart.assign(1, 0);
+  m->members.clear();
+  std::vector<int> count(size_t(n), 0);
+  for (const auto& list : lists) {
+    m->members.insert(m->members.end(), list.begin(), list.end());
+    m->memberStart.push_back(static_cast<int>(m->members.size()));
+    for (int p : list) ++count[size_t(p)];
+  }
+  m->particleStart.assign(size_t(n) + 1, 0);
+  for (int i = 0; i < n; ++i) m->particleStart[size_t(i) + 1] = m->particleStart[size_t(i)] + count[size_t(i)];
+  m->particleClusters.assign(m->members.size(), 0);
+  std::vector<int> fill(m->particleStart.begin(), m->particleStart.end() - 1);
+  for (int c = 0; c < nc; ++c)
+    for (int k = m->memberStart[size_t(c)]; k < m->memberStart[size_t(c) + 1]; ++k)
+      m->particleClusters[size_t(fill[size_t(m->members[size_t(k)])]++)] = c;
+  m->matchWeight.resize(n);
+  m->invCount.resize(n);
+  for (int i = 0; i < n; ++i) {
+    m->invCount[i] = 1.0f / float(count[size_t(i)]);
+    m->matchWeight[i] = m->mass[i] * m->invCount[i];
+  }
+  m->wholeBodyCluster = nc == 1 && int(m->members.size()) == n;
+  m->clusterRest.resize(size_t(nc));
+  m->tasks.clear();
+  m->taskStart.assign(1, 0);
+  for (int c = 0; c < nc; ++c) {
+    const int b = m->memberStart[size_t(c)], e = m->memberStart[size_t(c) + 1];
+    m->clusterRest[size_t(c)] = buildClusterRest(m->members.data() + b, e - b, m->rest.col(0).data(),
+                                                 m->rest.col(1).data(), m->rest.col(2).data(),
+                                                 m->matchWeight.data());
+    for (int k = b; k < e; k += kMembersPerTask)
+      m->tasks.push_back({c, k, std::min(e, k + kMembersPerTask)});
+    m->taskStart.push_back(static_cast<int>(m->tasks.size()));
+  }
+  return m;
+}
+
+// Cluster state for the current positions: identity plastic state, goals = rest shape placed at
+// the clusters' current centres.
+void resetClusterState(const BodyModel& m, BodyState& s) {
+  const size_t nc = size_t(m.clusterCount());
+  s.plastic.assign(nc, Mat3::Identity());
+  s.shape.resize(nc);
+  s.rotation.assign(nc, Eigen::Quaterniond::Identity());
+  s.ref.resize(nc);
+  s.goal.assign(nc, GoalTransform{});
+  for (size_t c = 0; c < nc; ++c) {
+    s.shape[c] = deriveClusterShape(m.clusterRest[c], Mat3::Identity());
+    Vec3 centre = Vec3::Zero();
+    double mass = 0;
+    for (int k = m.memberStart[c]; k < m.memberStart[c + 1]; ++k) {
+      const int i = m.members[size_t(k)];
+      centre += double(m.matchWeight[i]) * s.x.row(i).transpose().cast<double>();
+      mass += m.matchWeight[i];
+    }
+    s.ref[c] = (centre / mass).cast<float>();
+    s.goal[c].L.setIdentity();
+    s.goal[c].t = m.origin.cast<float>();
+  }
+}
+
+void resetBodyState(const BodyModel& m, BodyState& s) {
+  s.x = m.startPositions;
+  s.v = m.startVelocities;
+  resetClusterState(m, s);
+}
+
+struct Force {
+  BodyHandle body;
+  int particle;
+  Vec3 force;
+};
+
+// One unit of per-particle work: particles [begin, end) of a body.
+struct ParticleBlock {
+  int slot;
+  int begin, end;
+};
+
+}  // namespace
+
+struct World::Data {
+  WorldSettings settings;
+  std::vector<Collider> colliders;
+  std::vector<BodySlot> slots;
+  std::vector<int> order;  // alive slots in creation order
+  std::map<int, DragDef> drags;
+  int nextDragId = 1;
+  std::vector<Force> forces;
+  double time = 0;
+  StepProfile profile;
+  std::vector<WorldEvent> events;
+
+  BodySlot& slot(BodyHandle h) {
+    if (h.index >= slots.size() || !slots[h.index].alive || slots[h.index].generation != h.generation)
+      throw std::invalid_argument("unknown body handle");
+    return slots[h.index];
+  }
+  BodyHandle handleOf(int s) const {
+    return BodyHandle{static_cast<std::uint32_t>(s), slots[size_t(s)].generation};
+  }
+
+  void substep(double h, StepProfile& prof);
+  void applyExternal(double h);
+  void computeGoals(double h, std::vector<char>& bad, StepProfile& prof);
+  void integrate(double h, std::vector<char>& bad);
+  void damp();
+  void collide();
+};
+
+// ---------------------------------------------------------------------------------------------
+// One sub-step.
+
+void World::Data::applyExternal(double h) {
+  for (const Force& f : forces) {
+    BodySlot& b = slot(f.body);
+    const float dv = float(h / b.model->mass[f.particle]);
+    for (int a = 0; a < 3; ++a) b.state.v(f.particle, a) += dv * float(f.force[a]);
+  }
+  for (const auto& [id, drag] : drags) {
+    BodySlot& b = slot(drag.body);
+    Vec3 point = Vec3::Zero();
+    double sumW2 = 0;
+    for (size_t k = 0; k < drag.particles.size(); ++k) {
+      point += drag.weights[k] * b.state.x.row(drag.particles[k]).transpose().cast<double>();
+      sumW2 += drag.weights[k] * drag.weights[k];
+    }
+    // Minimum-norm particle moves that bring the point onto the target, as a velocity change
+    // that closes `stiffness` of the gap over this sub-step.
+    const Vec3 gap = drag.target - point;
+    for (size_t k = 0; k < drag.particles.size(); ++k) {
+      const Vec3 dv = (drag.stiffness * drag.weights[k] / (sumW2 * h)) * gap;
+      b.state.v.row(drag.particles[k]) += dv.transpose().cast<float>();
+    }
+  }
+}
+
+void World::Data::computeGoals(double h, std::vector<char>& bad, StepProfile& prof) {
+  auto t0 = Clock::now();
+  // All moment tasks of the world in a fixed order.
+  struct GlobalTask {
+    int slot;
+    int task;
+  };
+  std::vector<GlobalTask> tasks;
+  struct GlobalCluster {
+    int slot;
+    int cluster;
+    int firstTask;  // index into `tasks`
+  };
+  std::vector<GlobalCluster> clusters;
+  for (int s : order) {
+    const BodyModel& m = *slots[size_t(s)].model;
+    const int base = static_cast<int>(tasks.size());
+    for (int t = 0; t < static_cast<int>(m.tasks.size()); ++t) tasks.push_back({s, t});
+    for (int c = 0; c < m.clusterCount(); ++c)
+      clusters.push_back({s, c, base + m.taskStart[size_t(c)]});
+  }
+  std::vector<ClusterMoments> partial(tasks.size());
+  parallelFor(static_cast<int>(tasks.size()), kMinParallelTasks, [&](int i) {
+    const BodySlot& b = slots[size_t(tasks[size_t(i)].slot)];
+    const BodyModel& m = *b.model;
+    const MomentTask& task = m.tasks[size_t(tasks[size_t(i)].task)];
+    ParticleColumns cols{{b.state.x.col(0).data(), b.state.x.col(1).data(), b.state.x.col(2).data()},
+                         {m.rest.col(0).data(), m.rest.col(1).data(), m.rest.col(2).data()},
+                         m.matchWeight.data()};
+    const bool quadratic = b.params.mode == Mode::Quadratic;
+    partial[size_t(i)] = m.wholeBodyCluster
+        ? accumulateMoments(cols, nullptr, task.begin, task.end, b.state.ref[size_t(task.cluster)],
+                            m.clusterRest[size_t(task.cluster)].centre, quadratic)
+        : accumulateMoments(cols, m.members.data(), task.begin, task.end,
+                            b.state.ref[size_t(task.cluster)],
+                            m.clusterRest[size_t(task.cluster)].centre, quadratic);
+  });
+  // Per cluster: sum its tasks in order, fit, plastic flow, goal transform.
+  std::vector<double> plasticSeconds(clusters.size(), 0.0);
+  std::vector<char> clusterBad(clusters.size(), 0);
+  parallelFor(static_cast<int>(clusters.size()), 64, [&](int i) {
+    const GlobalCluster& gc = clusters[size_t(i)];
+    BodySlot& b = slots[size_t(gc.slot)];
+    const BodyModel& m = *b.model;
+    BodyState& s = b.state;
+    const size_t c = size_t(gc.cluster);
+    ClusterMoments sum;
+    const int taskCount = m.taskStart[c + 1] - m.taskStart[c];
+    for (int t = 0; t < taskCount; ++t) sum += partial[size_t(gc.firstTask + t)];
+    const Eigen::Vector3f ref = s.ref[c];
+    ClusterFit fit = fitCluster(sum, ref, m.clusterRest[c], s.shape[c], s.plastic[c], s.rotation[c]);
+    if (!fit.finite) {
+      clusterBad[size_t(i)] = 1;
+      return;
+    }
+    if (b.params.plasticity.enabled()) {
+      const auto tp = Clock::now();
+      const Mat3 R = fit.rotation.matrix();
+      const Mat3 stretch = R.transpose() * fit.linear;
+      if (updatePlasticDeformation(0.5 * (stretch + stretch.transpose()), h, b.params.plasticity,
+                                   s.plastic[c])) {
+        s.shape[c] = deriveClusterShape(m.clusterRest[c], s.plastic[c]);
+        fit = fitCluster(sum, ref, m.clusterRest[c], s.shape[c], s.plastic[c], fit.rotation);
+      }
+      plasticSeconds[size_t(i)] = secondsSince(tp);
+    }
+    s.rotation[c] = fit.rotation;
+    s.ref[c] = fit.centre.cast<float>();
+    s.goal[c] = goalTransform(fit, sum, ref, m.clusterRest[c], s.shape[c], s.plastic[c], b.params);
+    if (!s.goal[c].L.allFinite() || !s.goal[c].Q.allFinite() || !s.goal[c].t.allFinite())
+      clusterBad[size_t(i)] = 1;
+  });
+  double plasticTotal = 0;
+  for (size_t i = 0; i < clusters.size(); ++i) {
+    plasticTotal += plasticSeconds[i];
+    if (clusterBad[i]) bad[size_t(clusters[i].slot)] = 1;
+  }
+  // Plastic time is measured inside the cluster loop (summed over threads); report it apart.
+  const double total = secondsSince(t0);
+  prof.plasticity += std::min(plasticTotal, total);
+  prof.goals += total - std::min(plasticTotal, total);
+}
+
+namespace {
+
+// Integrates particles [begin, end) of one body; returns true if a non-finite value appeared.
+bool integrateBlock(const BodyModel& m, BodyState& s, const BodyParams& params, const Vec3& gravity,
+                    double h, int begin, int end) {
+  float* __restrict px = s.x.col(0).data();
+  float* __restrict py = s.x.col(1).data();
+  float* __restrict pz = s.x.col(2).data();
+  float* __restrict vx = s.v.col(0).data();
+  float* __restrict vy = s.v.col(1).data();
+  float* __restrict vz = s.v.col(2).data();
+  const float* __restrict rx = m.rest.col(0).data();
+  const float* __restrict ry = m.rest.col(1).data();
+  const float* __restrict rz = m.rest.col(2).data();
+  const float hf = float(h);
+  const float pull = float(params.alpha / h);
+  const float gvx = float(h * gravity.x()), gvy = float(h * gravity.y()), gvz = float(h * gravity.z());
+  const bool quadratic = params.mode == Mode::Quadratic;
+  int badFlag = 0;
+  // v += α(g − x)/h + h·gravity ; x += h·v
+  auto update = [&](int i, float gx, float gy, float gz) {
+    const float nvx = vx[i] + pull * (gx - px[i]) + gvx;
+    const float nvy = vy[i] + pull * (gy - py[i]) + gvy;
+    const float nvz = vz[i] + pull * (gz - pz[i]) + gvz;
+    const float nx = px[i] + hf * nvx, ny = py[i] + hf * nvy, nz = pz[i] + hf * nvz;
+    vx[i] = nvx;
+    vy[i] = nvy;
+    vz[i] = nvz;
+    px[i] = nx;
+    py[i] = ny;
+    pz[i] = nz;
+    // x − x is 0 for finite x and NaN otherwise; the comparison vectorises as an integer OR.
+    badFlag |= ((nx - nx) + (ny - ny) + (nz - nz) + (nvx - nvx) + (nvy - nvy) + (nvz - nvz)) != 0.0f;
+  };
+  if (m.wholeBodyCluster) {
+    const GoalTransform& T = s.goal[0];
+    const float L00 = T.L(0, 0), L01 = T.L(0, 1), L02 = T.L(0, 2);
+    const float L10 = T.L(1, 0), L11 = T.L(1, 1), L12 = T.L(1, 2);
+    const float L20 = T.L(2, 0), L21 = T.L(2, 1), L22 = T.L(2, 2);
+    const float tx = T.t.x(), ty = T.t.y(), tz = T.t.z();
+    if (!quadratic) {
+      for (int i = begin; i < end; ++i) {
+        const float gx = L00 * rx[i] + L01 * ry[i] + L02 * rz[i] + tx;
+        const float gy = L10 * rx[i] + L11 * ry[i] + L12 * rz[i] + ty;
+        const float gz = L20 * rx[i] + L21 * ry[i] + L22 * rz[i] + tz;
+        update(i, gx, gy, gz);
+      }
+    } else {
+      float Q[3][6];
+      for (int a = 0; a < 3; ++a)
+        for (int j = 0; j < 6; ++j) Q[a][j] = T.Q(a, j);
+      for (int i = begin; i < end; ++i) {
+        const float x = rx[i], y = ry[i], z = rz[i];
+        const float mo[6] = {x * x, y * y, z * z, x * y, y * z, z * x};
+        float g[3];
+        const float L[3][3] = {{L00, L01, L02}, {L10, L11, L12}, {L20, L21, L22}};
+        const float t[3] = {tx, ty, tz};
+        for (int a = 0; a < 3; ++a) {
+          float acc = L[a][0] * x + L[a][1] * y + L[a][2] * z;
+          for (int j = 0; j < 6; ++j) acc += Q[a][j] * mo[j];
+          g[a] = acc + t[a];
+        }
+        update(i, g[0], g[1], g[2]);
+      }
+    }
+  } else {
+    for (int i = begin; i < end; ++i) {
+      // Average the goal transforms of the particle's clusters, then evaluate once.
+      Eigen::Matrix3f L = Eigen::Matrix3f::Zero();
+      Eigen::Matrix<float, 3, 6> Q = Eigen::Matrix<float, 3, 6>::Zero();
+      Eigen::Vector3f t = Eigen::Vector3f::Zero();
+      for (int k = m.particleStart[size_t(i)]; k < m.particleStart[size_t(i) + 1]; ++k) {
+        const GoalTransform& T = s.goal[size_t(m.particleClusters[size_t(k)])];
+        L += T.L;
+        t += T.t;
+        if (quadratic) Q += T.Q;
+      }
+      const Eigen::Vector3f r(rx[i], ry[i], rz[i]);
+      Eigen::Vector3f g = L * r + t;
+      if (quadratic) g += Q * monomials<float>(r);
+      g *= m.invCount[i];
+      update(i, g.x(), g.y(), g.z());
+    }
+  }
+  return badFlag != 0;
+}
+
+}  // namespace
+
+void World::Data::integrate(double h, std::vector<char>& bad) {
+  std::vector<ParticleBlock> blocks;
+  for (int s : order) {
+    const int n = slots[size_t(s)].model->particleCount();
+    for (int b = 0; b < n; b += kParticlesPerBlock)
+      blocks.push_back({s, b, std::min(n, b + kParticlesPerBlock)});
+  }
+  std::vector<char> blockBad(blocks.size(), 0);
+  parallelFor(static_cast<int>(blocks.size()), 2, [&](int i) {
+    const ParticleBlock& blk = blocks[size_t(i)];
+    BodySlot& b = slots[size_t(blk.slot)];
+    blockBad[size_t(i)] =
+        integrateBlock(*b.model, b.state, b.params, settings.gravity, h, blk.begin, blk.end);
+  });
+  for (size_t i = 0; i < blocks.size(); ++i)
+    if (blockBad[i]) bad[size_t(blocks[i].slot)] = 1;
+  // Pinned particles stay where they started.
+  for (int s : order) {
+    BodySlot& b = slots[size_t(s)];
+    for (int p : b.model->pinned) {
+      b.state.x.row(p) = b.model->startPositions.row(p);
+      b.state.v.row(p).setZero();
+    }
+  }
+}
+
+void World::Data::damp() {
+  std::vector<int> damped;
+  for (int s : order)
+    if (slots[size_t(s)].params.damping > 0.0) damped.push_back(s);
+  parallelFor(static_cast<int>(damped.size()), 2, [&](int k) {
+    BodySlot& b = slots[size_t(damped[size_t(k)])];
+    const BodyModel& m = *b.model;
+    MatX3f& x = b.state.x;
+    MatX3f& v = b.state.v;
+    const int n = m.particleCount();
+    // Fit the rigid motion (linear and angular velocity) that has the body's momenta.
+    Vec3 xc = Vec3::Zero(), vc = Vec3::Zero();
+    for (int i = 0; i < n; ++i) {
+      xc += double(m.mass[i]) * x.row(i).transpose().cast<double>();
+      vc += double(m.mass[i]) * v.row(i).transpose().cast<double>();
+    }
+    xc /= m.totalMass;
+    vc /= m.totalMass;
+    Vec3 L = Vec3::Zero();
+    Mat3 I = Mat3::Zero();
+    for (int i = 0; i < n; ++i) {
+      const Vec3 r = x.row(i).transpose().cast<double>() - xc;
+      L += double(m.mass[i]) * r.cross(v.row(i).transpose().cast<double>());
+      I += double(m.mass[i]) * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
+    }
+    const Vec3 omega = symmetricPseudoInverse<3>(I, 1e-9) * L;
+    const double kd = b.params.damping;
+    for (int i = 0; i < n; ++i) {
+      const Vec3 r = x.row(i).transpose().cast<double>() - xc;
+      const Vec3 vi = v.row(i).transpose().cast<double>();
+      const Vec3 rigid = vc + omega.cross(r);
+      v.row(i) = (vi + kd * (rigid - vi)).transpose().cast<float>();
+    }
+  });
+}
+
+void World::Data::collide() {
+  if (colliders.empty()) return;
+  std::vector<ParticleBlock> blocks;
+  for (int s : order) {
+    const int n = slots[size_t(s)].model->particleCount();
+    for (int b = 0; b < n; b += kParticlesPerBlock)
+      blocks.push_back({s, b, std::min(n, b + kParticlesPerBlock)});
+  }
+  parallelFor(static_cast<int>(blocks.size()), 2, [&](int i) {
+    const ParticleBlock& blk = blocks[size_t(i)];
+    BodyState& s = slots[size_t(blk.slot)].state;
+    for (int p = blk.begin; p < blk.end; ++p) {
+      Vec3 x = s.x.row(p).transpose().cast<double>();
+      Vec3 v = s.v.row(p).transpose().cast<double>();
+      bool touched = false;
+      for (const Collider& c : colliders) {
+        Vec3 n;
+        const double d = colliderDistance(c, x, &n);
+        if (!(d < 0.0)) continue;
+        touched = true;
+        x -= d * n;  // back onto the surface
+        const double vn = v.dot(n);
+        if (vn < 0.0) {
+          Vec3 vt = v - vn * n;
+          // Coulomb: tangential speed lost is at most μ times the normal speed removed.
+          const double vtLen = vt.norm();
+          const double loss = c.friction * -vn;
+          vt = vtLen <= loss ? Vec3::Zero() : Vec3(vt * (1.0 - loss / vtLen));
+          v = vt;
+        }
+      }
+      if (touched) {
+        s.x.row(p) = x.transpose().cast<float>();
+        s.v.row(p) = v.transpose().cast<float>();
+      }
+    }
+  });
+}
+
+void World::Data::substep(double h, StepProfile& prof) {
+  auto t = Clock::now();
+  applyExternal(h);
+  prof.external += secondsSince(t);
+
+  std::vector<char> bad(slots.size(), 0);
+  computeGoals(h, bad, prof);
+
+  t = Clock::now();
+  integrate(h, bad);
+  prof.integrate += secondsSince(t);
+
+  t = Clock::now();
+  damp();
+  prof.damping += secondsSince(t);
+
+  t = Clock::now();
+  collide();
+  prof.collide += secondsSince(t);
+
+  t = Clock::now();
+  for (int s : order) {
+    if (!bad[size_t(s)]) continue;
+    BodySlot& b = slots[size_t(s)];
+    resetBodyState(*b.model, b.state);
+    events.push_back({handleOf(s), "body '" + b.model->name +
+                                       "' produced NaN/Inf (time " + str(time) +
+                                       " s); it was reset to its start state"});
+  }
+  prof.check += secondsSince(t);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Public API.
+
+World::World(const WorldSettings& settings) : d_(std::make_unique<Data>()) { setSettings(settings); }
+World::~World() = default;
+World::World(World&&) noexcept = default;
+World& World::operator=(World&&) noexcept = default;
+World::World(const World& o) : d_(std::make_unique<Data>(*o.d_)) {}
+World& World::operator=(const World& o) {
+  if (this != &o) d_ = std::make_unique<Data>(*o.d_);
+  return *this;
+}
+
+const WorldSettings& World::settings() const { return d_->settings; }
+
+void World::setSettings(const WorldSettings& s) {
+  if (!s.gravity.allFinite() || s.gravity.norm() > 1e4)
+    throw std::invalid_argument("gravity: must be finite and at most 1e4 m/s²");
+  if (!(s.timeStep > 0.0 && s.timeStep <= 10.0))
+    throw std::invalid_argument("timeStep: must be in (0, 10] seconds, got " + str(s.timeStep));
+  if (s.substeps < 1 || s.substeps > 1000)
+    throw std::invalid_argument("substeps: must be in [1, 1000], got " + std::to_string(s.substeps));
+  d_->settings = s;
+}
+
+void World::addCollider(const Collider& c) {
+  auto finite = [](const Vec3& v) { return v.allFinite(); };
+  if (!(c.friction >= 0.0 && c.friction <= 1e3))
+    throw std::invalid_argument("friction: must be in [0, 1000], got " + str(c.friction));
+  switch (c.shape) {
+    case Collider::Shape::Plane:
+      if (!finite(c.normal) || std::abs(c.normal.norm() - 1.0) > 1e-6 || !std::isfinite(c.offset))
+        throw std::invalid_argument("plane: normal must be a finite unit vector");
+      break;
+    case Collider::Shape::Box:
+      if (!finite(c.centre) || !finite(c.halfExtents) || (c.halfExtents.array() <= 0.0).any())
+        throw std::invalid_argument("box: centre must be finite and half extents positive");
+      if (!c.rotation.allFinite() ||
+          (c.rotation.transpose() * c.rotation - Mat3::Identity()).norm() > 1e-6 ||
+          c.rotation.determinant() < 0.0)
+        throw std::invalid_argument("box: rotation must be a proper rotation matrix");
+      break;
+    case Collider::Shape::Sphere:
+    case Collider::Shape::Capsule:
+      if (!finite(c.centre) || !finite(c.axis) || !(c.radius > 0.0) || !std::isfinite(c.radius))
+        throw std::invalid_argument(std::string(colliderShapeName(c.shape)) +
+                                    ": centre/axis must be finite and radius positive");
+      break;
+  }
+  d_->colliders.push_back(c);
+}
+
+void World::clearColliders() { d_->colliders.clear(); }
+const std::vector<Collider>& World::colliders() const { return d_->colliders; }
+
+BodyHandle World::addBody(const BodyDef& def) {
+  const int n = static_cast<int>(def.positions.size());
+  if (n == 0) throw std::invalid_argument("positions: a body needs at least one particle");
+  if (n > (1 << 28)) throw std::invalid_argument("positions: too many particles");
+  for (int i = 0; i < n; ++i)
+    if (!def.positions[size_t(i)].allFinite())
+      throw std::invalid_argument("positions[" + std::to_string(i) + "]: not finite");
+  if (!def.masses.empty()) {
+    if (int(def.masses.size()) != n)
+      throw std::invalid_argument("masses: " + std::to_string(def.masses.size()) +
+                                  " values for " + std::to_string(n) + " particles");
+    for (int i = 0; i < n; ++i)
+      if (!(def.masses[size_t(i)] > 0.0) || !std::isfinite(def.masses[size_t(i)]))
+        throw std::invalid_argument("masses[" + std::to_string(i) + "]: must be > 0");
+  } else if (!(def.totalMass > 0.0) || !std::isfinite(def.totalMass)) {
+    throw std::invalid_argument("mass: must be > 0 kg, got " + str(def.totalMass));
+  }
+  if (!def.velocity.allFinite()) throw std::invalid_argument("velocity: not finite");
+  for (int p : def.pinned)
+    if (p < 0 || p >= n)
+      throw std::invalid_argument("pinned: particle index " + std::to_string(p) +
+                                  " out of range [0, " + std::to_string(n) + ")");
+  validateParams(def.params);
+
+  BodySlot slot;
+  slot.model = buildModel(def, def.clusters, nullptr);  // throws on bad clusters
+  slot.params = def.params;
+  slot.alive = true;
+  resetBodyState(*slot.model, slot.state);
+
+  size_t index = d_->slots.size();
+  for (size_t i = 0; i < d_->slots.size(); ++i)
+    if (!d_->slots[i].alive) {
+      index = i;
+      break;
+    }
+  if (index == d_->slots.size()) d_->slots.emplace_back();
+  slot.generation = d_->slots[index].generation;
+  d_->slots[index] = std::move(slot);
+  d_->order.push_back(static_cast<int>(index));
+  return d_->handleOf(static_cast<int>(index));
+}
+
+void World::removeBody(BodyHandle h) {
+  BodySlot& s = d_->slot(h);
+  s.alive = false;
+  ++s.generation;
+  s.model.reset();
+  s.state = BodyState{};
+  d_->order.erase(std::find(d_->order.begin(), d_->order.end(), int(h.index)));
+  for (auto it = d_->drags.begin(); it != d_->drags.end();)
+    it = it->second.body == h ? d_->drags.erase(it) : std::next(it);
+}
+
+bool World::contains(BodyHandle h) const {
+  return h.index < d_->slots.size() && d_->slots[h.index].alive &&
+         d_->slots[h.index].generation == h.generation;
+}
+
+std::vector<BodyHandle> World::bodies() const {
+  std::vector<BodyHandle> out;
+  for (int s : d_->order) out.push_back(d_->handleOf(s));
+  return out;
+}
+
+const std::string& World::name(BodyHandle h) const { return d_->slot(h).model->name; }
+const BodyParams& World::params(BodyHandle h) const { return d_->slot(h).params; }
+
+void World::setParams(BodyHandle h, const BodyParams& p) {
+  BodySlot& s = d_->slot(h);
+  validateParams(p);
+  s.params = p;
+}
+
+const ClusterDef& World::clusterDef(BodyHandle h) const { return d_->slot(h).model->clusterDef; }
+
+void World::setClusters(BodyHandle h, const ClusterDef& clusters) {
+  BodySlot& s = d_->slot(h);
+  auto model = buildModel(BodyDef{}, clusters, s.model);  // throws; body unchanged then
+  s.model = std::move(model);
+  resetClusterState(*s.model, s.state);
+}
+
+int World::clusterCount(BodyHandle h) const { return d_->slot(h).model->clusterCount(); }
+
+std::vector<std::vector<int>> World::clusterMembers(BodyHandle h) const {
+  const BodyModel& m = *d_->slot(h).model;
+  std::vector<std::vector<int>> out(size_t(m.clusterCount()));
+  for (int c = 0; c < m.clusterCount(); ++c)
+    out[size_t(c)].assign(m.members.begin() + m.memberStart[size_t(c)],
+                          m.members.begin() + m.memberStart[size_t(c) + 1]);
+  return out;
+}
+
+int World::particleCount(BodyHandle h) const { return d_->slot(h).model->particleCount(); }
+
+ConstPointsRef World::positions(BodyHandle h) const { return d_->slot(h).state.x; }
+ConstPointsRef World::velocities(BodyHandle h) const { return d_->slot(h).state.v; }
+ConstPointsRef World::restPositions(BodyHandle h) const { return d_->slot(h).model->startPositions; }
+
+Eigen::VectorXf World::masses(BodyHandle h) const { return d_->slot(h).model->mass; }
+double World::mass(BodyHandle h) const { return d_->slot(h).model->totalMass; }
+
+Vec3 World::centreOfMass(BodyHandle h) const {
+  const BodySlot& s = d_->slot(h);
+  Vec3 c = Vec3::Zero();
+  for (int i = 0; i < s.model->particleCount(); ++i)
+    c += double(s.model->mass[i]) * s.state.x.row(i).transpose().cast<double>();
+  return c / s.model->totalMass;
+}
+
+Vec3 World::linearMomentum(BodyHandle h) const {
+  const BodySlot& s = d_->slot(h);
+  Vec3 p = Vec3::Zero();
+  for (int i = 0; i < s.model->particleCount(); ++i)
+    p += double(s.model->mass[i]) * s.state.v.row(i).transpose().cast<double>();
+  return p;
+}
+
+Vec3 World::angularMomentum(BodyHandle h, const Vec3& about) const {
+  const BodySlot& s = d_->slot(h);
+  Vec3 L = Vec3::Zero();
+  for (int i = 0; i < s.model->particleCount(); ++i) {
+    const Vec3 r = s.state.x.row(i).transpose().cast<double>() - about;
+    L += double(s.model->mass[i]) * r.cross(s.state.v.row(i).transpose().cast<double>());
+  }
+  return L;
+}
+
+void World::setState(BodyHandle h, const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& v) {
+  BodySlot& s = d_->slot(h);
+  const int n = s.model->particleCount();
+  if (x.rows() != n || v.rows() != n)
+    throw std::invalid_argument("setState: expected " + std::to_string(n) + " rows");
+  if (!x.allFinite() || !v.allFinite()) throw std::invalid_argument("setState: not finite");
+  s.state.x = x.cast<float>();
+  s.state.v = v.cast<float>();
+}
+
+Eigen::MatrixX3d World::goals(BodyHandle h) const {
+  const BodySlot& b = d_->slot(h);
+  const BodyModel& m = *b.model;
+  Eigen::MatrixX3d out(m.particleCount(), 3);
+  for (int i = 0; i < m.particleCount(); ++i) {
+    Vec3 g = Vec3::Zero();
+    const Vec3 r = m.rest.row(i).transpose().cast<double>();
+    for (int k = m.particleStart[size_t(i)]; k < m.particleStart[size_t(i) + 1]; ++k) {
+      const GoalTransform& T = b.state.goal[size_t(m.particleClusters[size_t(k)])];
+      g += T.L.cast<double>() * r + T.Q.cast<double>() * monomials<double>(r) + T.t.cast<double>();
+    }
+    out.row(i) = (g * double(m.invCount[i])).transpose();
+  }
+  return out;
+}
+
+Mat3 World::plasticDeformation(BodyHandle h, int cluster) const {
+  const BodySlot& b = d_->slot(h);
+  if (cluster < 0 || cluster >= b.model->clusterCount())
+    throw std::invalid_argument("cluster index out of range");
+  return b.state.plastic[size_t(cluster)];
+}
+
+void World::addForce(BodyHandle h, int particle, const Vec3& force) {
+  const BodySlot& b = d_->slot(h);
+  if (particle < 0 || particle >= b.model->particleCount())
+    throw std::invalid_argument("addForce: particle index out of range");
+  if (!force.allFinite()) throw std::invalid_argument("addForce: force not finite");
+  d_->forces.push_back({h, particle, force});
+}
+
+int World::addDrag(const DragDef& drag) {
+  const BodySlot& b = d_->slot(drag.body);
+  if (drag.particles.empty() || drag.particles.size() != drag.weights.size())
+    throw std::invalid_argument("drag: needs matching, non-empty particles and weights");
+  double sumW2 = 0;
+  for (size_t k = 0; k < drag.particles.size(); ++k) {
+    if (drag.particles[k] < 0 || drag.particles[k] >= b.model->particleCount())
+      throw std::invalid_argument("drag: particle index out of range");
+    if (!std::isfinite(drag.weights[k])) throw std::invalid_argument("drag: weight not finite");
+    sumW2 += drag.weights[k] * drag.weights[k];
+  }
+  if (!(sumW2 > 0.0)) throw std::invalid_argument("drag: all weights are zero");
+  if (!drag.target.allFinite()) throw std::invalid_argument("drag: target not finite");
+  requireRange("drag stiffness", drag.stiffness, 0.0, 1.0);
+  const int id = d_->nextDragId++;
+  d_->drags[id] = drag;
+  return id;
+}
+
+void World::setDragTarget(int id, const Vec3& target) {
+  auto it = d_->drags.find(id);
+  if (it == d_->drags.end()) throw std::invalid_argument("drag: unknown id");
+  if (!target.allFinite()) throw std::invalid_argument("drag: target not finite");
+  it->second.target = target;
+}
+
+void World::setDragStiffness(int id, double stiffness) {
+  auto it = d_->drags.find(id);
+  if (it == d_->drags.end()) throw std::invalid_argument("drag: unknown id");
+  requireRange("drag stiffness", stiffness, 0.0, 1.0);
+  it->second.stiffness = stiffness;
+}
+
+void World::removeDrag(int id) { d_->drags.erase(id); }
+
+void World::step() { step(d_->settings.timeStep); }
+
+void World::step(double dt) {
+  if (!(dt > 0.0 && dt <= 10.0))
+    throw std::invalid_argument("step: dt must be in (0, 10] seconds, got " + str(dt));
+  const int n = d_->settings.substeps;
+  StepProfile prof;
+  for (int i = 0; i < n; ++i) d_->substep(dt / n, prof);
+  d_->forces.clear();
+  d_->profile = prof;
+  d_->time += dt;
+}
+
+void World::reset() {
+  for (int s : d_->order) {
+    BodySlot& b = d_->slots[size_t(s)];
+    resetBodyState(*b.model, b.state);
+  }
+  d_->drags.clear();
+  d_->forces.clear();
+  d_->time = 0;
+}
+
+double World::time() const { return d_->time; }
+const StepProfile& World::lastProfile() const { return d_->profile; }
+
+std::vector<WorldEvent> World::takeEvents() {
+  std::vector<WorldEvent> out;
+  out.swap(d_->events);
+  return out;
+}
+
+std::uint64_t World::stateHash() const {
+  std::uint64_t hash = 1469598103934665603ULL;  // FNV-1a
+  auto mix = [&](const void* data, size_t bytes) {
+    const unsigned char* p = static_cast<const unsigned char*>(data);
+    for (size_t i = 0; i < bytes; ++i) hash = (hash ^ p[i]) * 1099511628211ULL;
+  };
+  for (int s : d_->order) {
+    const BodyState& st = d_->slots[size_t(s)].state;
+    mix(st.x.data(), sizeof(float) * size_t(st.x.size()));
+    mix(st.v.data(), sizeof(float) * size_t(st.v.size()));
+    for (const Mat3& p : st.plastic) mix(p.data(), sizeof(double) * 9);
+  }
+  return hash;
+}
+
+}  // namespace sb
