@@ -1,0 +1,168 @@
+// The interactive viewer: a GLFW window showing a Scene, stepping its World every frame, with
+// an orbit camera, mouse dragging of bodies and an ImGui control panel.
+//
+// The class is split over files by concern: viewer_app.cpp (window, frame loop, drawing),
+// viewer_input.cpp (mouse, keyboard, camera, dragging), viewer_ui.cpp (ImGui panel),
+// viewer_stats.cpp (the --stats JSON file).
+#pragma once
+
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "app/viewer_options.h"
+#include "render/orbit_camera.h"
+#include "sim/scene.h"
+
+struct GLFWwindow;
+
+namespace sb::render {
+class MeshBuffer;
+class MeshRenderer;
+class GroundRenderer;
+class DebugDraw;
+}  // namespace sb::render
+
+namespace sb::app {
+
+// What the viewer keeps per body to draw and pick it.
+struct BodyView {
+  std::vector<std::int32_t> triangles;  // #T×3 flat, the scene's renderTriangles(i)
+  PointsRowMajor vertices;              // deformed render vertices of this frame, #V×3
+  std::vector<float> normals;           // smooth normals of this frame, #V×3 flat
+  std::unique_ptr<render::MeshBuffer> mesh;
+  std::vector<std::pair<int, int>> cageEdges;  // unique edges of the particle mesh
+  std::vector<std::vector<int>> clusters;      // cached World::clusterMembers
+  bool embedded = false;  // render vertices come from the cage embedding (else = particles)
+  glm::vec4 colour{1.0f};
+  glm::vec3 boundsMin{0.0f}, boundsMax{0.0f};  // of this frame's vertices
+};
+
+// Rolling timing figures, milliseconds.
+struct FrameTimings {
+  static constexpr int kHistory = 180;
+  std::array<float, kHistory> simHistory{}, deformHistory{}, renderHistory{}, frameHistory{};
+  int cursor = 0;
+  // Sums since start (for the averages in the stats file).
+  double simSum = 0, deformSum = 0, renderSum = 0, frameSum = 0;
+  StepProfile phaseSum;  // seconds
+  long frames = 0, steps = 0;
+  // Last frame.
+  double lastSim = 0, lastDeform = 0, lastRender = 0, lastFrame = 0;
+};
+
+class ViewerApp {
+ public:
+  ViewerApp(const ViewerOptions& options, Scene scene);
+  ~ViewerApp();
+  ViewerApp(const ViewerApp&) = delete;
+  ViewerApp& operator=(const ViewerApp&) = delete;
+
+  // Creates the window, GL objects and ImGui. Returns false with *error on failure.
+  bool open(std::string* error);
+  // Runs until the window is closed or options.frames frames were shown. Returns the exit code.
+  int run();
+
+ private:
+  // ---- viewer_app.cpp ----
+  void rebuildBodyViews();
+  void refreshClusters(int body);
+  void frameCamera();
+  void stepSimulation();
+  void updateMeshes();
+  void renderFrame();
+  void drawOverlays(render::DebugDraw& draw);
+  void drawColliders(render::DebugDraw& draw);
+  bool openScene(const std::string& path);
+  void saveCurrentScene(const std::string& path);
+  bool takeScreenshot(const std::string& path);
+  void collectEvents();
+  void resetSimulation();
+  float groundHeight() const;
+
+  // ---- viewer_input.cpp ----
+  void installCallbacks();
+  void onMouseButton(int button, int action, int mods);
+  void onCursorPos(double x, double y);
+  void onScroll(double dx, double dy);
+  void onKey(int key, int action, int mods);
+  void beginDrag(double x, double y, bool nearestParticle);
+  void updateDragTarget();
+  void endDrag();
+  render::Ray rayAtCursor(double x, double y) const;
+
+  // ---- viewer_ui.cpp ----
+  void drawUi();
+  void drawBodyPanel(int body);
+  void drawWorldPanel();
+  void drawTimingPanel();
+  void drawScenePanel();
+
+  // ---- viewer_stats.cpp ----
+  void writeStats(const std::string& path) const;
+
+  ViewerOptions options_;
+  Scene scene_;
+  GLFWwindow* window_ = nullptr;
+  bool imguiReady_ = false;
+  int framebufferWidth_ = 0, framebufferHeight_ = 0;
+  int windowWidth_ = 0, windowHeight_ = 0;
+
+  std::unique_ptr<render::MeshRenderer> meshRenderer_;
+  std::unique_ptr<render::GroundRenderer> groundRenderer_;
+  std::unique_ptr<render::DebugDraw> debugDraw_;
+  std::vector<BodyView> views_;
+  render::OrbitCamera camera_;
+  float sceneSize_ = 1.0f;  // diagonal of the bodies' bounds when the scene was opened, metres
+
+  // Simulation control.
+  bool paused_ = false;
+  bool stepOnce_ = false;
+  bool resetRequested_ = false;
+  int stepsPerFrame_ = 1;
+
+  // Overlays.
+  bool showParticles_ = false;
+  bool showCage_ = false;
+  bool showClusters_ = false;
+  bool showGoals_ = false;
+  bool showColliders_ = true;
+
+  // Mouse state.
+  double cursorX_ = 0, cursorY_ = 0;
+  bool orbiting_ = false, panning_ = false;
+
+  // The active drag (left mouse button on a body).
+  struct Drag {
+    bool active = false;
+    int id = -1;
+    int body = -1;
+    glm::vec3 planePoint{0.0f}, planeNormal{0.0f, 0.0f, 1.0f};
+    glm::vec3 grabPoint{0.0f};  // where the body was grabbed (world)
+    glm::vec3 target{0.0f};
+    std::vector<int> particles;
+    std::vector<double> weights;
+    bool nearestParticle = false;
+  } drag_;
+  float dragStiffness_ = 0.2f;
+
+  // Messages and events shown in the window.
+  std::deque<std::string> eventLog_;
+  long eventCount_ = 0;
+  std::string errorMessage_, statusMessage_;
+  std::string scenePathInput_, savePathInput_, screenshotPathInput_;
+
+  FrameTimings timings_;
+  std::array<float, 4> pauseButtonRect_{};  // window pixels x0, y0, x1, y1 (for tests)
+  long frame_ = 0;
+  std::chrono::steady_clock::time_point start_;
+};
+
+}  // namespace sb::app

@@ -1,0 +1,22 @@
+// Command-line options of the viewer (softbody [SCENE] [options]).
+#pragma once
+
+#include <string>
+
+namespace sb::app {
+
+struct ViewerOptions {
+  std::string scenePath;      // empty: defaultScenePath()
+  int frames = -1;            // > 0: exit after this many frames (headless: steps; default 300)
+  std::string screenshot;     // PNG written at the last frame (or at frame 120 without --frames)
+  std::string statsPath;      // JSON with timings, body centres and screen bounds
+  int statsEvery = 30;        // also rewrite the stats file every N frames while running (0: only at exit)
+  double fpsCap = 60.0;       // frames per second at most (vsync does not throttle under Xvfb)
+  int width = 1280;           // window size in pixels
+  int height = 720;
+  bool startPaused = false;   // start with the simulation paused
+  bool hideBodies = false;    // draw everything but the body meshes (tests compare against it)
+  bool hideUi = false;        // no ImGui panel
+};
+
+}  // namespace sb::app

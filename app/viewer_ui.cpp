@@ -1,0 +1,308 @@
+// The ImGui control panel: a fixed panel on the left of the window (fixed, so tests can click
+// its controls at known pixels). Every control has a tooltip. Changes apply immediately to the
+// running World.
+#include <algorithm>
+#include <cstdio>
+#include <string>
+
+#include <imgui.h>
+#include <imgui_stdlib.h>
+
+#include "app/viewer_app.h"
+
+namespace sb::app {
+
+namespace {
+
+constexpr float kPanelWidth = 340.0f;
+
+void tooltip(const char* text) {
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", text);
+}
+
+// A float slider bound to a double, with a tooltip. Returns true when the value changed.
+bool sliderDouble(const char* label, double* value, float lo, float hi, const char* format,
+                  const char* help, ImGuiSliderFlags flags = 0) {
+  float v = static_cast<float>(*value);
+  const bool changed = ImGui::SliderFloat(label, &v, lo, hi, format, flags);
+  tooltip(help);
+  if (changed) *value = static_cast<double>(v);
+  return changed;
+}
+
+}  // namespace
+
+void ViewerApp::drawUi() {
+  ImGui::SetNextWindowPos(ImVec2(0.0f, 0.0f), ImGuiCond_Always);
+  ImGui::SetNextWindowSize(ImVec2(kPanelWidth, static_cast<float>(std::max(windowHeight_, 100))),
+                           ImGuiCond_Always);
+  ImGui::Begin("softbody", nullptr,
+               ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
+  ImGui::PushItemWidth(-140.0f);
+
+  // ---- run control (first row: its position is fixed for the tests) ----
+  ImGui::Checkbox("Pause", &paused_);
+  {
+    const ImVec2 lo = ImGui::GetItemRectMin(), hi = ImGui::GetItemRectMax();
+    pauseButtonRect_ = {lo.x, lo.y, hi.x, hi.y};
+  }
+  tooltip("Stop or resume the simulation (key: space). Dragging and the camera keep working.");
+  ImGui::SameLine();
+  if (ImGui::Button("Step")) {
+    paused_ = true;
+    stepOnce_ = true;
+  }
+  tooltip("Pause and advance exactly one time step (keys: S or N).");
+  ImGui::SameLine();
+  if (ImGui::Button("Reset")) resetRequested_ = true;
+  tooltip("Put every body back to its start state; clears plastic deformation and drags (key: R).");
+  ImGui::SameLine();
+  if (ImGui::Button("Screenshot")) takeScreenshot(screenshotPathInput_);
+  tooltip("Write the current frame (with this panel) as a PNG to the path set under Scene.");
+
+  ImGui::Text("t = %.2f s   frame %ld   %.0f fps", scene_.world.time(), frame_,
+              ImGui::GetIO().Framerate);
+
+  if (!errorMessage_.empty()) {
+    ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1.0f, 0.4f, 0.35f, 1.0f));
+    ImGui::TextWrapped("%s", errorMessage_.c_str());
+    ImGui::PopStyleColor();
+    if (ImGui::SmallButton("dismiss")) errorMessage_.clear();
+    tooltip("Hide this message.");
+  }
+  if (!statusMessage_.empty()) ImGui::TextDisabled("%s", statusMessage_.c_str());
+
+  if (!eventLog_.empty()) {
+    ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1.0f, 0.85f, 0.3f, 1.0f));
+    ImGui::TextWrapped("%ld simulation event(s); latest: %s", eventCount_, eventLog_.front().c_str());
+    ImGui::PopStyleColor();
+    tooltip("Bodies whose state became NaN/Inf are reset to their start by the simulation.");
+    if (ImGui::TreeNode("All events")) {
+      for (const std::string& e : eventLog_) ImGui::BulletText("%s", e.c_str());
+      if (ImGui::SmallButton("clear")) eventLog_.clear();
+      tooltip("Forget the listed events.");
+      ImGui::TreePop();
+    }
+  }
+
+  if (ImGui::CollapsingHeader("World", ImGuiTreeNodeFlags_DefaultOpen)) drawWorldPanel();
+  if (ImGui::CollapsingHeader("Bodies", ImGuiTreeNodeFlags_DefaultOpen)) {
+    for (std::size_t i = 0; i < scene_.bodies.size(); ++i) drawBodyPanel(static_cast<int>(i));
+  }
+  if (ImGui::CollapsingHeader("Overlays", ImGuiTreeNodeFlags_DefaultOpen)) {
+    ImGui::Checkbox("particles", &showParticles_);
+    tooltip("Show the simulated particles (the cage vertices) as points (key: P).");
+    ImGui::SameLine();
+    ImGui::Checkbox("cage", &showCage_);
+    tooltip("Show the particle mesh (cage) as a wireframe (key: C).");
+    ImGui::SameLine();
+    ImGui::Checkbox("clusters", &showClusters_);
+    tooltip("Show each shape-matching cluster in its own colour: lines from the cluster's centre "
+            "to its particles (key: K).");
+    ImGui::Checkbox("goals", &showGoals_);
+    tooltip("Show the goal positions shape matching pulls the particles toward (key: G).");
+    ImGui::SameLine();
+    ImGui::Checkbox("colliders", &showColliders_);
+    tooltip("Show static colliders other than the ground as wireframes.");
+  }
+  if (ImGui::CollapsingHeader("Timings", ImGuiTreeNodeFlags_DefaultOpen)) drawTimingPanel();
+  if (ImGui::CollapsingHeader("Scene")) drawScenePanel();
+  if (ImGui::CollapsingHeader("Help")) {
+    ImGui::TextWrapped(
+        "Left drag: pull the surface point under the cursor.\n"
+        "Ctrl + left drag: pull the nearest particle.\n"
+        "Right drag: orbit. Shift + right drag or middle drag: pan. Wheel: zoom.\n"
+        "Space: pause. S/N: step. R: reset. F: frame the scene.\n"
+        "P/C/K/G: particles, cage, clusters, goals. Arrows: orbit. +/-: zoom. Esc/Q: quit.");
+  }
+  ImGui::PopItemWidth();
+  ImGui::End();
+}
+
+void ViewerApp::drawWorldPanel() {
+  World& world = scene_.world;
+  WorldSettings s = world.settings();
+  bool changed = false;
+  float gravity[3] = {static_cast<float>(s.gravity.x()), static_cast<float>(s.gravity.y()),
+                      static_cast<float>(s.gravity.z())};
+  if (ImGui::DragFloat3("gravity", gravity, 0.05f, -50.0f, 50.0f, "%.2f")) {
+    s.gravity = Vec3(gravity[0], gravity[1], gravity[2]);
+    changed = true;
+  }
+  tooltip("Gravity acceleration in m/s^2 (x, y, z). Drag a number or double-click to type.");
+  double stepMs = s.timeStep * 1000.0;
+  if (sliderDouble("time step (ms)", &stepMs, 1.0f, 50.0f, "%.2f",
+                   "Simulated time advanced per frame, milliseconds. One step runs per drawn frame, "
+                   "so 16.67 ms at 60 fps is real time.",
+                   ImGuiSliderFlags_Logarithmic)) {
+    s.timeStep = stepMs / 1000.0;
+    changed = true;
+  }
+  if (ImGui::SliderInt("substeps", &s.substeps, 1, 20)) changed = true;
+  tooltip("Sub-steps per time step: more = stiffer contacts and goals, more cost.");
+  if (changed) {
+    try {
+      world.setSettings(s);
+    } catch (const std::exception& e) {
+      errorMessage_ = e.what();
+    }
+  }
+
+  const std::vector<Collider>& colliders = world.colliders();
+  if (!colliders.empty()) {
+    double friction = colliders.front().friction;
+    if (sliderDouble("friction", &friction, 0.0f, 2.0f, "%.2f",
+                     "Friction coefficient mu of every collider (ground included).")) {
+      std::vector<Collider> updated = colliders;
+      try {
+        world.clearColliders();
+        for (Collider& c : updated) {
+          c.friction = friction;
+          world.addCollider(c);
+        }
+      } catch (const std::exception& e) {
+        errorMessage_ = e.what();
+      }
+    }
+  } else {
+    ImGui::TextDisabled("no colliders");
+  }
+  if (ImGui::SliderFloat("drag stiffness", &dragStiffness_, 0.01f, 1.0f, "%.2f")) {
+    if (drag_.active) scene_.world.setDragStiffness(drag_.id, dragStiffness_);
+  }
+  tooltip("Fraction of the gap between the grabbed point and the mouse closed per step "
+          "(mouse dragging).");
+}
+
+void ViewerApp::drawBodyPanel(int body) {
+  World& world = scene_.world;
+  const BodyHandle h = scene_.bodies[body].handle;
+  const BodyView& v = views_[body];
+  ImGui::PushID(body);
+  ImGui::ColorButton("##colour", ImVec4(v.colour.r, v.colour.g, v.colour.b, 1.0f),
+                     ImGuiColorEditFlags_NoTooltip, ImVec2(12, 12));
+  ImGui::SameLine();
+  if (ImGui::TreeNodeEx(world.name(h).c_str(), body == 0 ? ImGuiTreeNodeFlags_DefaultOpen : 0)) {
+    BodyParams p = world.params(h);
+    bool changed = false;
+    int mode = static_cast<int>(p.mode);
+    if (ImGui::Combo("mode", &mode, "rigid\0linear\0quadratic\0")) {
+      p.mode = static_cast<Mode>(mode);
+      changed = true;
+    }
+    tooltip("Shape matching goal: rigid keeps the rest shape; linear allows shear and stretch; "
+            "quadratic also bending and twisting.");
+    changed |= sliderDouble("alpha", &p.alpha, 0.0f, 1.0f, "%.3f",
+                            "Stiffness: fraction of the way to the goal per step (1 = rigid-stiff).");
+    changed |= sliderDouble("beta", &p.beta, 0.0f, 1.0f, "%.3f",
+                            "Blend of the goal between rotation only (0) and the linear/quadratic fit (1).");
+    changed |= sliderDouble("damping", &p.damping, 0.0f, 1.0f, "%.3f",
+                            "Damping per step of the velocity relative to the body's rigid motion.");
+    changed |= sliderDouble("c_yield", &p.plasticity.yield, 0.0f, 1.0f, "%.3f",
+                            "Plastic yield: stretch ||S - I|| above which the rest shape creeps.");
+    changed |= sliderDouble("c_creep", &p.plasticity.creep, 0.0f, 20.0f, "%.2f",
+                            "Plastic creep rate in 1/s (0 = no plasticity).");
+    changed |= sliderDouble("c_max", &p.plasticity.max, 0.0f, 2.0f, "%.3f",
+                            "Upper bound of the permanent deformation ||Sp - I||.");
+    if (changed) {
+      try {
+        world.setParams(h, p);
+      } catch (const std::exception& e) {
+        errorMessage_ = world.name(h) + ": " + e.what();
+      }
+    }
+
+    // Clusters: rebuilt when a control is released (a rebuild clears plastic deformation).
+    ClusterDef clusters = world.clusterDef(h);
+    bool rebuild = false;
+    int kind = clusters.kind == ClusterDef::Kind::Grid ? 1 : 0;
+    if (clusters.kind == ClusterDef::Kind::Explicit) {
+      ImGui::TextDisabled("clusters: explicit lists from the scene");
+      if (ImGui::SmallButton("use a grid instead")) {
+        clusters.kind = ClusterDef::Kind::Grid;
+        rebuild = true;
+      }
+      tooltip("Replace the scene's explicit clusters with a grid of cells.");
+    } else {
+      if (ImGui::RadioButton("single cluster", &kind, 0)) rebuild = true;
+      tooltip("One cluster with every particle: the stiffest body.");
+      ImGui::SameLine();
+      if (ImGui::RadioButton("grid", &kind, 1)) rebuild = true;
+      tooltip("Overlapping cubic cells over the rest shape: smaller cells = floppier body.");
+      clusters.kind = kind == 1 ? ClusterDef::Kind::Grid : ClusterDef::Kind::Single;
+    }
+    const glm::vec3 extent = v.boundsMax - v.boundsMin;
+    const float size = std::max({extent.x, extent.y, extent.z, 1e-3f});
+    if (clusters.kind == ClusterDef::Kind::Grid) {
+      float cell = static_cast<float>(clusters.cellSize);
+      ImGui::SliderFloat("cell size (m)", &cell, size / 20.0f, size * 1.5f, "%.3f",
+                         ImGuiSliderFlags_Logarithmic);
+      if (ImGui::IsItemDeactivatedAfterEdit()) rebuild = true;
+      tooltip("Edge of a grid cell in metres; applied when you release the slider.");
+      clusters.cellSize = cell;
+      float overlap = static_cast<float>(clusters.overlap);
+      ImGui::SliderFloat("overlap (m)", &overlap, 0.0f, size * 0.5f, "%.3f");
+      if (ImGui::IsItemDeactivatedAfterEdit()) rebuild = true;
+      tooltip("Each cell also takes particles within this distance: couples neighbouring "
+              "clusters. Applied when you release the slider.");
+      clusters.overlap = overlap;
+    }
+    if (rebuild) {
+      try {
+        world.setClusters(h, clusters);
+        refreshClusters(body);
+      } catch (const std::exception& e) {
+        errorMessage_ = world.name(h) + ": " + e.what();
+      }
+    }
+    ImGui::Text("%d particles, %d clusters", world.particleCount(h), world.clusterCount(h));
+    ImGui::TreePop();
+  }
+  ImGui::PopID();
+}
+
+void ViewerApp::drawTimingPanel() {
+  const StepProfile& p = scene_.world.lastProfile();
+  const double ms = 1000.0;
+  ImGui::Text("simulation %.3f ms  (last step() %.3f ms)", timings_.lastSim, p.total() * ms);
+  tooltip("Wall time of this frame's World::step() calls, and the phases of the last one.");
+  ImGui::Text("  external %.3f  goals %.3f  plastic %.3f", p.external * ms, p.goals * ms,
+              p.plasticity * ms);
+  ImGui::Text("  integrate %.3f  damping %.3f", p.integrate * ms, p.damping * ms);
+  ImGui::Text("  collide %.3f  check %.3f", p.collide * ms, p.check * ms);
+  ImGui::Text("deform %.3f ms   render %.3f ms", timings_.lastDeform, timings_.lastRender);
+  tooltip("deform: render vertices = W x particles, plus smooth normals.\n"
+          "render: panel, drawing, buffer swap.");
+  ImGui::Text("frame %.2f ms", timings_.lastFrame);
+  const int n = FrameTimings::kHistory;
+  const ImVec2 plotSize(kPanelWidth - 140.0f, 36.0f);
+  ImGui::PlotLines("simulation", timings_.simHistory.data(), n, timings_.cursor, nullptr, 0.0f,
+                   FLT_MAX, plotSize);
+  tooltip("Simulation milliseconds per frame, last 3 seconds.");
+  ImGui::PlotLines("deform", timings_.deformHistory.data(), n, timings_.cursor, nullptr, 0.0f,
+                   FLT_MAX, plotSize);
+  tooltip("Deformation (W x particles) and normals, milliseconds per frame.");
+  ImGui::PlotLines("render", timings_.renderHistory.data(), n, timings_.cursor, nullptr, 0.0f,
+                   FLT_MAX, plotSize);
+  tooltip("Panel, drawing and swap, milliseconds per frame.");
+  ImGui::PlotLines("frame", timings_.frameHistory.data(), n, timings_.cursor, nullptr, 0.0f,
+                   FLT_MAX, plotSize);
+  tooltip("Time between frames in milliseconds (the frame cap makes it 16.7 ms at 60 fps).");
+}
+
+void ViewerApp::drawScenePanel() {
+  ImGui::InputText("scene file", &scenePathInput_);
+  tooltip("Path of a scene JSON file to open.");
+  if (ImGui::Button("Open")) openScene(scenePathInput_);
+  tooltip("Open the scene file above. If it has an error, the message shows here and the "
+          "current scene keeps running.");
+  ImGui::InputText("save as", &savePathInput_);
+  tooltip("Path to save the current scene with its current parameters to.");
+  if (ImGui::Button("Save")) saveCurrentScene(savePathInput_);
+  tooltip("Write the scene with the current world settings and body parameters "
+          "(atomic: a temporary file renamed over the target).");
+  ImGui::InputText("screenshot", &screenshotPathInput_);
+  tooltip("PNG path the Screenshot button writes to.");
+}
+
+}  // namespace sb::app

@@ -1,0 +1,40 @@
+# Shared helpers of the viewer test scripts (sourced). Needs SOFTBODY, CHECK and WORK set.
+set -euo pipefail
+
+XVFB_SERVER_ARGS="-screen 0 1280x720x24"
+
+fail() {
+  echo "FAIL: $*" >&2
+  exit 1
+}
+
+# wait_for_frame STATS N [TIMEOUT_S]: waits until the stats file reports frame >= N.
+wait_for_frame() {
+  local stats=$1 want=$2 timeout=${3:-60} waited=0 frame
+  while :; do
+    if [ -s "$stats" ]; then
+      frame=$("$CHECK" get "$stats" /frame 2>/dev/null || echo 0)
+      [ "$frame" -ge "$want" ] && return 0
+    fi
+    if [ -n "${VIEWER_PID:-}" ] && ! kill -0 "$VIEWER_PID" 2>/dev/null; then
+      fail "the viewer exited before frame $want (see $WORK/viewer.log)"
+    fi
+    sleep 0.1
+    waited=$((waited + 1))
+    [ "$waited" -ge $((timeout * 10)) ] && fail "timed out waiting for frame $want in $stats"
+  done
+}
+
+# snapshot STATS N OUT: waits for frame >= N and copies the stats file to OUT.
+snapshot() {
+  wait_for_frame "$1" "$2"
+  cp "$1" "$3"
+}
+
+# finish_viewer: waits for the background viewer to exit and checks its exit code.
+finish_viewer() {
+  local code=0
+  wait "$VIEWER_PID" || code=$?
+  VIEWER_PID=
+  [ "$code" -eq 0 ] || { cat "$WORK/viewer.log" >&2; fail "the viewer exited with code $code"; }
+}

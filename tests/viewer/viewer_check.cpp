@@ -1,0 +1,186 @@
+// viewer_check: reads the viewer's --stats JSON files and screenshots for the viewer tests.
+//
+//   viewer_check get STATS /json/pointer        print a value (arrays: space separated)
+//   viewer_check grab-pixel STATS BODY           a window pixel that hits BODY: "x y"
+//   viewer_check pause-point STATS               centre of the Pause checkbox: "x y"
+//   viewer_check visible SHOT.png EMPTY.png STATS
+//       every body's projected screen bounds differ from the same frame drawn without bodies
+//   viewer_check moved REF.json DRAG.json BODY MIN_METRES
+//       BODY's centre in DRAG minus REF, along the camera's right axis, is at least MIN_METRES
+//   viewer_check still A.json B.json
+//       paused in both, B is a later frame, simulated time and every centre unchanged
+// Exit code 0 = the check holds, 1 = it does not, 2 = bad input.
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+#include <stb_image.h>
+
+using nlohmann::json;
+
+namespace {
+
+json readJson(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read " + path);
+  return json::parse(in);
+}
+
+void printValue(const json& v) {
+  if (v.is_array()) {
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      if (i) std::printf(" ");
+      printValue(v[i]);
+    }
+  } else if (v.is_number_integer()) {
+    std::printf("%lld", static_cast<long long>(v.get<long long>()));
+  } else if (v.is_number()) {
+    std::printf("%.9g", v.get<double>());
+  } else if (v.is_string()) {
+    std::printf("%s", v.get<std::string>().c_str());
+  } else {
+    std::printf("%s", v.dump().c_str());
+  }
+}
+
+struct Image {
+  int width = 0, height = 0;
+  unsigned char* pixels = nullptr;  // RGB
+  explicit Image(const std::string& path) {
+    int channels = 0;
+    pixels = stbi_load(path.c_str(), &width, &height, &channels, 3);
+    if (!pixels) throw std::runtime_error("cannot read image " + path);
+  }
+  ~Image() { stbi_image_free(pixels); }
+  Image(const Image&) = delete;
+  Image& operator=(const Image&) = delete;
+  const unsigned char* at(int x, int y) const { return pixels + 3 * (static_cast<long>(y) * width + x); }
+};
+
+int visible(const std::string& shotPath, const std::string& emptyPath, const std::string& statsPath) {
+  const Image shot(shotPath), empty(emptyPath);
+  const json stats = readJson(statsPath);
+  if (shot.width != empty.width || shot.height != empty.height) {
+    std::printf("image sizes differ\n");
+    return 1;
+  }
+  const json& bodies = stats.at("bodies");
+  if (bodies.empty()) {
+    std::printf("no bodies in %s\n", statsPath.c_str());
+    return 1;
+  }
+  int failures = 0;
+  for (std::size_t b = 0; b < bodies.size(); ++b) {
+    const json& bounds = bodies[b].at("screenBounds");
+    const int x0 = std::max(0, static_cast<int>(std::floor(bounds[0].get<double>())));
+    const int y0 = std::max(0, static_cast<int>(std::floor(bounds[1].get<double>())));
+    const int x1 = std::min(shot.width - 1, static_cast<int>(std::ceil(bounds[2].get<double>())));
+    const int y1 = std::min(shot.height - 1, static_cast<int>(std::ceil(bounds[3].get<double>())));
+    long total = 0, differing = 0;
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) {
+        const unsigned char* a = shot.at(x, y);
+        const unsigned char* e = empty.at(x, y);
+        const int d = std::max({std::abs(a[0] - e[0]), std::abs(a[1] - e[1]), std::abs(a[2] - e[2])});
+        ++total;
+        if (d > 24) ++differing;
+      }
+    const double fraction = total ? static_cast<double>(differing) / static_cast<double>(total) : 0.0;
+    const bool ok = total >= 100 && fraction >= 0.25;
+    std::printf("body %zu (%s): bounds [%d,%d]-[%d,%d], %ld px, %.1f%% differ from the empty frame: %s\n",
+                b, bodies[b].value("name", "?").c_str(), x0, y0, x1, y1, total, 100.0 * fraction,
+                ok ? "visible" : "NOT VISIBLE");
+    if (!ok) ++failures;
+  }
+  return failures ? 1 : 0;
+}
+
+double centreComponent(const json& stats, int body, int axis) {
+  return stats.at("bodies").at(body).at("centre").at(axis).get<double>();
+}
+
+int moved(const std::string& refPath, const std::string& dragPath, int body, double minMetres) {
+  const json ref = readJson(refPath), drag = readJson(dragPath);
+  const json& right = drag.at("camera").at("right");
+  double along = 0.0, distance2 = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    const double d = centreComponent(drag, body, a) - centreComponent(ref, body, a);
+    along += d * right.at(a).get<double>();
+    distance2 += d * d;
+  }
+  std::printf("body %d: centre moved %.4f m along the camera's right axis (%.4f m in total) "
+              "compared with the run without dragging; need >= %.4f\n",
+              body, along, std::sqrt(distance2), minMetres);
+  return along >= minMetres ? 0 : 1;
+}
+
+int still(const std::string& aPath, const std::string& bPath) {
+  const json a = readJson(aPath), b = readJson(bPath);
+  bool ok = true;
+  if (!a.at("paused").get<bool>() || !b.at("paused").get<bool>()) {
+    std::printf("not paused (A: %s, B: %s)\n", a.at("paused").dump().c_str(), b.at("paused").dump().c_str());
+    ok = false;
+  }
+  if (b.at("frame").get<long>() <= a.at("frame").get<long>()) {
+    std::printf("B (frame %ld) is not later than A (frame %ld)\n", b.at("frame").get<long>(),
+                a.at("frame").get<long>());
+    ok = false;
+  }
+  if (a.at("simTime").get<double>() != b.at("simTime").get<double>()) {
+    std::printf("simulated time advanced while paused: %.6f -> %.6f\n", a.at("simTime").get<double>(),
+                b.at("simTime").get<double>());
+    ok = false;
+  }
+  const std::size_t n = a.at("bodies").size();
+  for (std::size_t i = 0; i < n; ++i)
+    for (int axis = 0; axis < 3; ++axis)
+      if (centreComponent(a, static_cast<int>(i), axis) != centreComponent(b, static_cast<int>(i), axis)) {
+        std::printf("body %zu moved while paused\n", i);
+        ok = false;
+        break;
+      }
+  std::printf("frames %ld -> %ld, t = %.4f s -> %.4f s: %s\n", a.at("frame").get<long>(),
+              b.at("frame").get<long>(), a.at("simTime").get<double>(), b.at("simTime").get<double>(),
+              ok ? "still" : "NOT STILL");
+  return ok ? 0 : 1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    const std::string command = argc > 1 ? argv[1] : "";
+    if (command == "get" && argc == 4) {
+      printValue(readJson(argv[2]).at(json::json_pointer(argv[3])));
+      std::printf("\n");
+      return 0;
+    }
+    if (command == "grab-pixel" && argc == 4) {
+      const json& p = readJson(argv[2]).at("bodies").at(std::stoi(argv[3])).at("grabPixel");
+      if (p.is_null()) {
+        std::fprintf(stderr, "no pixel hits body %s\n", argv[3]);
+        return 1;
+      }
+      std::printf("%d %d\n", p[0].get<int>(), p[1].get<int>());
+      return 0;
+    }
+    if (command == "pause-point" && argc == 3) {
+      const json& r = readJson(argv[2]).at("pauseCheckbox");
+      // The checkbox square sits at the left of the item: click inside it.
+      const double h = r[3].get<double>() - r[1].get<double>();
+      std::printf("%d %d\n", static_cast<int>(r[0].get<double>() + 0.5 * h),
+                  static_cast<int>(0.5 * (r[1].get<double>() + r[3].get<double>())));
+      return 0;
+    }
+    if (command == "visible" && argc == 5) return visible(argv[2], argv[3], argv[4]);
+    if (command == "moved" && argc == 6) return moved(argv[2], argv[3], std::stoi(argv[4]), std::stod(argv[5]));
+    if (command == "still" && argc == 4) return still(argv[2], argv[3]);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "viewer_check: %s\n", e.what());
+    return 2;
+  }
+  std::fprintf(stderr, "usage: see the top of tests/viewer/viewer_check.cpp\n");
+  return 2;
+}
