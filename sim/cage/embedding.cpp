@@ -1,0 +1,604 @@
+#include "sim/cage/embedding.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iostream>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <sys/stat.h>
+
+#include <omp.h>
+
+#include <Eigen/Dense>
+#include <Eigen/Geometry>
+#include <Eigen/SparseCore>
+
+#include "sim/cage/cage_validation.h"
+#include "sim/cage/mvc.h"
+
+namespace sb::cage {
+
+namespace {
+
+using Vec3 = Eigen::Vector3d;
+
+constexpr char kMagic[8] = {'S', 'B', 'M', 'V', 'C', 'W', '0', '1'};
+constexpr std::uint64_t kFormatVersion = 1;
+
+// A 64-bit hash of a byte stream, 8 bytes at a time (not cryptographic; a cache key).
+class Hasher {
+ public:
+  explicit Hasher(std::uint64_t seed) : h_(seed ^ 0x9E3779B97F4A7C15ull) {}
+  void bytes(const void* data, std::size_t n) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    std::size_t i = 0;
+    for (; i + 8 <= n; i += 8) {
+      std::uint64_t w;
+      std::memcpy(&w, p + i, 8);
+      mix(w);
+    }
+    std::uint64_t tail = 0;
+    for (std::size_t k = 0; i < n; ++i, ++k) tail |= static_cast<std::uint64_t>(p[i]) << (8 * k);
+    mix(tail ^ (static_cast<std::uint64_t>(n) << 56));
+  }
+  template <class T>
+  void value(const T& v) {
+    bytes(&v, sizeof(T));
+  }
+  std::uint64_t digest() const {
+    std::uint64_t z = h_ + 0x9E3779B97F4A7C15ull;
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+  }
+
+ private:
+  void mix(std::uint64_t w) {
+    w *= 0x87C37B91114253D5ull;
+    w = (w << 31) | (w >> 33);
+    w *= 0x4CF5AD432745937Full;
+    h_ ^= w;
+    h_ = ((h_ << 27) | (h_ >> 37)) * 5 + 0x52DCE729;
+  }
+  std::uint64_t h_;
+};
+
+std::uint64_t checksum(const std::string& data) {
+  Hasher h(0x5EEDu);
+  h.bytes(data.data(), data.size());
+  return h.digest();
+}
+
+template <class T>
+void put(std::string& out, const T& v) {
+  out.append(reinterpret_cast<const char*>(&v), sizeof(T));
+}
+
+struct Reader {
+  const std::string& data;
+  std::size_t pos = 0;
+  const std::string& path;
+  template <class T>
+  T get() {
+    if (pos + sizeof(T) > data.size()) throw std::runtime_error(path + ": truncated");
+    T v;
+    std::memcpy(&v, data.data() + pos, sizeof(T));
+    pos += sizeof(T);
+    return v;
+  }
+};
+
+// Stats are stored as a fixed list of doubles.
+std::vector<double> statsToList(const BindStats& s) {
+  return {s.seconds, static_cast<double>(s.threads), s.fromCache ? 1.0 : 0.0, s.minWeight, s.maxWeight,
+          static_cast<double>(s.negativeCount), s.maxSumError, s.maxLinearError, s.unprunedLinearError,
+          s.pruningError, s.maxPrunedL1, static_cast<double>(s.nonZeros), s.worstConditioning,
+          static_cast<double>(s.farPoints), static_cast<double>(s.onCagePoints)};
+}
+BindStats statsFromList(const std::vector<double>& v) {
+  BindStats s;
+  s.seconds = v[0];
+  s.threads = static_cast<int>(v[1]);
+  s.fromCache = v[2] != 0.0;
+  s.minWeight = v[3];
+  s.maxWeight = v[4];
+  s.negativeCount = static_cast<std::int64_t>(v[5]);
+  s.maxSumError = v[6];
+  s.maxLinearError = v[7];
+  s.unprunedLinearError = v[8];
+  s.pruningError = v[9];
+  s.maxPrunedL1 = v[10];
+  s.nonZeros = static_cast<std::int64_t>(v[11]);
+  s.worstConditioning = v[12];
+  s.farPoints = static_cast<std::int64_t>(v[13]);
+  s.onCagePoints = static_cast<std::int64_t>(v[14]);
+  return s;
+}
+constexpr std::size_t kStatsCount = 15;
+
+void writeFileAtomic(const std::string& path, const std::string& data) {
+  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw std::runtime_error(path + ": cannot create " + tmp + ": " + std::strerror(errno));
+    out.write(data.data(), static_cast<std::streamsize>(data.size()));
+    out.flush();
+    if (!out) {
+      std::remove(tmp.c_str());
+      throw std::runtime_error(path + ": write failed");
+    }
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const std::string why = std::strerror(errno);
+    std::remove(tmp.c_str());
+    throw std::runtime_error(path + ": cannot rename " + tmp + ": " + why);
+  }
+}
+
+// Prunes one row in place (see BindOptions::pruneThreshold). q_j = (v_j − x) / L.
+// Returns the L1 norm of the change.
+double pruneRow(std::vector<std::pair<int, double>>& row, const double* w, int m, const std::vector<Vec3>& q,
+                double threshold) {
+  double maxAbs = 0.0;
+  for (int j = 0; j < m; ++j) maxAbs = std::max(maxAbs, std::abs(w[j]));
+  const double cut = threshold * maxAbs;
+  row.clear();
+  Eigen::Vector4d r = Eigen::Vector4d::Zero();  // dropped mass and moment
+  double dropped = 0.0;
+  for (int j = 0; j < m; ++j) {
+    if (std::abs(w[j]) >= cut && w[j] != 0.0) {
+      row.emplace_back(j, w[j]);
+    } else {
+      r += w[j] * Eigen::Vector4d(1.0, q[j].x(), q[j].y(), q[j].z());
+      dropped += std::abs(w[j]);
+    }
+  }
+  if (dropped == 0.0) return 0.0;
+  // Weighted minimum-norm correction: δ = D Aᵀ (A D Aᵀ)⁻¹ r, D = diag|w_j|, A's columns (1, q_j).
+  Eigen::Matrix4d M = Eigen::Matrix4d::Zero();
+  for (const auto& [j, wj] : row) {
+    const Eigen::Vector4d a(1.0, q[j].x(), q[j].y(), q[j].z());
+    M += std::abs(wj) * a * a.transpose();
+  }
+  Eigen::FullPivLU<Eigen::Matrix4d> lu(M);
+  double change = dropped;
+  if (lu.rank() == 4) {
+    const Eigen::Vector4d lambda = lu.solve(r);
+    for (auto& [j, wj] : row) {
+      const Eigen::Vector4d a(1.0, q[j].x(), q[j].y(), q[j].z());
+      const double delta = std::abs(wj) * a.dot(lambda);
+      wj += delta;
+      change += std::abs(delta);
+    }
+  } else {
+    // Kept vertices do not span 3D: restore Σw = 1 only, proportionally to |w|.
+    double keptAbs = 0.0;
+    for (const auto& e : row) keptAbs += std::abs(e.second);
+    for (auto& [j, wj] : row) {
+      const double delta = r[0] * std::abs(wj) / keptAbs;
+      wj += delta;
+      change += std::abs(delta);
+    }
+  }
+  return change;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Embedding
+
+Embedding Embedding::fromDense(DenseD weights, bool keepDouble) {
+  Embedding e;
+  e.rows_ = static_cast<int>(weights.rows());
+  e.cols_ = static_cast<int>(weights.cols());
+  e.sparse_ = false;
+  e.denseD_ = std::move(weights);
+  e.hasDouble_ = true;
+  e.makeFloat();
+  if (!keepDouble) {
+    e.denseD_ = DenseD();
+    e.hasDouble_ = false;
+  }
+  e.stats_.nonZeros = static_cast<std::int64_t>(e.rows_) * e.cols_;
+  return e;
+}
+
+Embedding Embedding::fromSparse(SparseD weights, bool keepDouble) {
+  Embedding e;
+  weights.makeCompressed();
+  e.rows_ = static_cast<int>(weights.rows());
+  e.cols_ = static_cast<int>(weights.cols());
+  e.sparse_ = true;
+  e.sparseD_ = std::move(weights);
+  e.hasDouble_ = true;
+  e.makeFloat();
+  if (!keepDouble) {
+    e.sparseD_ = SparseD();
+    e.hasDouble_ = false;
+  }
+  e.stats_.nonZeros = e.sparseF_.nonZeros();
+  return e;
+}
+
+void Embedding::makeFloat() {
+  if (sparse_) {
+    sparseF_ = sparseD_.cast<float>();
+    sparseF_.makeCompressed();
+  } else {
+    denseF_ = denseD_.cast<float>();
+  }
+}
+
+std::int64_t Embedding::nonZeros() const {
+  return sparse_ ? static_cast<std::int64_t>(sparseF_.nonZeros()) : static_cast<std::int64_t>(rows_) * cols_;
+}
+
+void Embedding::deform(ConstPointsRef cagePositions, PointsRowMajor& out) const {
+  if (cagePositions.rows() != cols_)
+    throw std::invalid_argument("Embedding::deform: got " + std::to_string(cagePositions.rows()) +
+                                " cage positions, the embedding has " + std::to_string(cols_));
+  out.resize(rows_, 3);
+  if (sparse_) {
+    out.noalias() = sparseF_ * cagePositions;
+  } else {
+    out.noalias() = denseF_ * cagePositions;
+  }
+}
+
+void Embedding::deformDouble(const Eigen::Matrix<double, Eigen::Dynamic, 3>& cagePositions,
+                             Eigen::Matrix<double, Eigen::Dynamic, 3>& out) const {
+  if (cagePositions.rows() != cols_)
+    throw std::invalid_argument("Embedding::deformDouble: wrong number of cage positions");
+  if (hasDouble_) {
+    if (sparse_) out.noalias() = sparseD_ * cagePositions;
+    else out.noalias() = denseD_ * cagePositions;
+  } else {
+    if (sparse_) out.noalias() = sparseF_.cast<double>() * cagePositions;
+    else out.noalias() = denseF_.cast<double>() * cagePositions;
+  }
+}
+
+void Embedding::rowWeights(int i, std::vector<std::pair<int, double>>& out) const {
+  out.clear();
+  if (i < 0 || i >= rows_) throw std::out_of_range("Embedding::rowWeights: row " + std::to_string(i));
+  if (sparse_) {
+    if (hasDouble_) {
+      for (SparseD::InnerIterator it(sparseD_, i); it; ++it) out.emplace_back(it.col(), it.value());
+    } else {
+      for (SparseF::InnerIterator it(sparseF_, i); it; ++it) out.emplace_back(it.col(), it.value());
+    }
+  } else {
+    for (int j = 0; j < cols_; ++j) {
+      const double v = hasDouble_ ? denseD_(i, j) : static_cast<double>(denseF_(i, j));
+      if (v != 0.0) out.emplace_back(j, v);
+    }
+  }
+}
+
+void Embedding::save(const std::string& path, const std::array<std::uint64_t, 2>& key) const {
+  std::string data;
+  data.append(kMagic, 8);
+  put(data, kFormatVersion);
+  put(data, key[0]);
+  put(data, key[1]);
+  put(data, static_cast<std::int64_t>(rows_));
+  put(data, static_cast<std::int64_t>(cols_));
+  put(data, static_cast<std::uint64_t>(sparse_ ? 1 : 0));
+  const auto st = statsToList(stats_);
+  put(data, static_cast<std::uint64_t>(st.size()));
+  for (double v : st) put(data, v);
+  if (sparse_) {
+    const std::int64_t nnz = sparseF_.nonZeros();
+    put(data, nnz);
+    const int* outer = hasDouble_ ? sparseD_.outerIndexPtr() : sparseF_.outerIndexPtr();
+    const int* inner = hasDouble_ ? sparseD_.innerIndexPtr() : sparseF_.innerIndexPtr();
+    for (int r = 0; r <= rows_; ++r) put(data, static_cast<std::int64_t>(outer[r]));
+    data.append(reinterpret_cast<const char*>(inner), sizeof(int) * static_cast<std::size_t>(nnz));
+    for (std::int64_t k = 0; k < nnz; ++k)
+      put(data, hasDouble_ ? sparseD_.valuePtr()[k] : static_cast<double>(sparseF_.valuePtr()[k]));
+  } else {
+    if (hasDouble_) {
+      data.append(reinterpret_cast<const char*>(denseD_.data()), sizeof(double) * static_cast<std::size_t>(denseD_.size()));
+    } else {
+      for (Eigen::Index k = 0; k < denseF_.size(); ++k) put(data, static_cast<double>(denseF_.data()[k]));
+    }
+  }
+  put(data, checksum(data));
+  writeFileAtomic(path, data);
+}
+
+Embedding Embedding::load(const std::string& path, std::array<std::uint64_t, 2>* key) {
+  std::string data;
+  {
+    std::FILE* f = std::fopen(path.c_str(), "rb");
+    if (!f) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
+    char buf[1 << 16];
+    std::size_t got;
+    while ((got = std::fread(buf, 1, sizeof(buf), f)) > 0) data.append(buf, got);
+    const bool bad = std::ferror(f) != 0;
+    std::fclose(f);
+    if (bad) throw std::runtime_error(path + ": read error");
+  }
+  if (data.size() < 8 + 8 * 8 || std::memcmp(data.data(), kMagic, 8) != 0)
+    throw std::runtime_error(path + ": not a softbody weight file (bad magic)");
+  std::uint64_t stored;
+  std::memcpy(&stored, data.data() + data.size() - 8, 8);
+  const std::string body = data.substr(0, data.size() - 8);
+  if (checksum(body) != stored) throw std::runtime_error(path + ": checksum mismatch (corrupt file)");
+  Reader rd{body, 8, path};
+  if (rd.get<std::uint64_t>() != kFormatVersion) throw std::runtime_error(path + ": unsupported version");
+  std::array<std::uint64_t, 2> k;
+  k[0] = rd.get<std::uint64_t>();
+  k[1] = rd.get<std::uint64_t>();
+  if (key) *key = k;
+  const auto rows = rd.get<std::int64_t>();
+  const auto cols = rd.get<std::int64_t>();
+  const auto sparse = rd.get<std::uint64_t>();
+  if (rows < 0 || cols <= 0 || rows > (1 << 30) || cols > (1 << 30) || sparse > 1)
+    throw std::runtime_error(path + ": bad header");
+  const auto nstats = rd.get<std::uint64_t>();
+  if (nstats != kStatsCount) throw std::runtime_error(path + ": bad statistics block");
+  std::vector<double> st(nstats);
+  for (auto& v : st) v = rd.get<double>();
+  Embedding e;
+  if (sparse) {
+    const auto nnz = rd.get<std::int64_t>();
+    if (nnz < 0 || nnz > rows * cols) throw std::runtime_error(path + ": bad nonzero count");
+    const std::size_t need = static_cast<std::size_t>(rows + 1) * 8 + static_cast<std::size_t>(nnz) * (4 + 8);
+    if (rd.pos + need != body.size()) throw std::runtime_error(path + ": size does not match the header");
+    std::vector<std::int64_t> outer(static_cast<std::size_t>(rows) + 1);
+    for (auto& o : outer) o = rd.get<std::int64_t>();
+    std::vector<int> inner(static_cast<std::size_t>(nnz));
+    for (auto& v : inner) v = rd.get<int>();
+    std::vector<Eigen::Triplet<double>> trips;
+    trips.reserve(static_cast<std::size_t>(nnz));
+    if (outer[0] != 0 || outer[static_cast<std::size_t>(rows)] != nnz) throw std::runtime_error(path + ": bad row offsets");
+    for (std::int64_t r = 0; r < rows; ++r) {
+      if (outer[r + 1] < outer[r]) throw std::runtime_error(path + ": bad row offsets");
+      for (std::int64_t q = outer[r]; q < outer[r + 1]; ++q) {
+        const int c = inner[static_cast<std::size_t>(q)];
+        if (c < 0 || c >= cols) throw std::runtime_error(path + ": column index out of range");
+        trips.emplace_back(static_cast<int>(r), c, 0.0);
+      }
+    }
+    for (auto& t : trips) {
+      const double v = rd.get<double>();
+      if (!std::isfinite(v)) throw std::runtime_error(path + ": non-finite weight");
+      t = Eigen::Triplet<double>(t.row(), t.col(), v);
+    }
+    SparseD W(rows, cols);
+    W.setFromTriplets(trips.begin(), trips.end());
+    e = fromSparse(std::move(W));
+  } else {
+    const std::size_t need = static_cast<std::size_t>(rows * cols) * 8;
+    if (rd.pos + need != body.size()) throw std::runtime_error(path + ": size does not match the header");
+    DenseD W(rows, cols);
+    std::memcpy(W.data(), body.data() + rd.pos, need);
+    if (!W.allFinite()) throw std::runtime_error(path + ": non-finite weight");
+    e = fromDense(std::move(W));
+  }
+  e.stats_ = statsFromList(st);
+  return e;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Bind
+
+std::array<std::uint64_t, 2> bindCacheKey(const std::vector<Vec3>& points, const TriangleMesh& cage,
+                                          const BindOptions& options) {
+  std::array<std::uint64_t, 2> key{};
+  for (int s = 0; s < 2; ++s) {
+    Hasher h(s == 0 ? 0x1234567ull : 0xABCDEF01ull);
+    h.value(kFormatVersion);
+    h.value(static_cast<std::uint64_t>(points.size()));
+    if (!points.empty()) h.bytes(points.data(), points.size() * sizeof(Vec3));
+    h.value(static_cast<std::uint64_t>(cage.vertices.size()));
+    if (!cage.vertices.empty()) h.bytes(cage.vertices.data(), cage.vertices.size() * sizeof(Vec3));
+    h.value(static_cast<std::uint64_t>(cage.triangles.size()));
+    if (!cage.triangles.empty()) h.bytes(cage.triangles.data(), cage.triangles.size() * sizeof(std::array<int, 3>));
+    h.value(static_cast<std::uint64_t>(options.storage));
+    h.value(static_cast<std::int64_t>(options.denseMaxCageVertices));
+    h.value(options.pruneThreshold);
+    h.value(static_cast<std::uint64_t>(options.keepDoublePrecision ? 1 : 0));
+    key[s] = h.digest();
+  }
+  return key;
+}
+
+std::string bindCachePath(const std::string& cacheDir, const std::array<std::uint64_t, 2>& key) {
+  char name[64];
+  std::snprintf(name, sizeof(name), "mvc-%016llx%016llx.sbw", static_cast<unsigned long long>(key[0]),
+                static_cast<unsigned long long>(key[1]));
+  std::string dir = cacheDir;
+  if (!dir.empty() && dir.back() != '/') dir += '/';
+  return dir + name;
+}
+
+Embedding bindMeanValue(const std::vector<Vec3>& points, const TriangleMesh& cage, const BindOptions& options) {
+  validateCage(cage, "cage");
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!points[i].allFinite()) throw std::invalid_argument("bind: point " + std::to_string(i) + " is not finite");
+  }
+  auto warn = [&](const std::string& msg) {
+    if (options.warning) options.warning(msg);
+    else std::cerr << "warning: " << msg << "\n";
+  };
+
+  std::array<std::uint64_t, 2> key{};
+  std::string cachePath;
+  if (!options.cacheDir.empty()) {
+    key = bindCacheKey(points, cage, options);
+    cachePath = bindCachePath(options.cacheDir, key);
+    struct stat sb;
+    if (::stat(cachePath.c_str(), &sb) == 0) {
+      try {
+        std::array<std::uint64_t, 2> stored{};
+        Embedding e = Embedding::load(cachePath, &stored);
+        if (stored != key || e.meshVertexCount() != static_cast<int>(points.size()) ||
+            e.cageVertexCount() != static_cast<int>(cage.vertices.size()))
+          throw std::runtime_error(cachePath + ": key or size mismatch");
+        e.stats().fromCache = true;
+        e.stats().seconds = 0.0;
+        return e;
+      } catch (const std::exception& ex) {
+        warn(std::string("ignoring bind cache: ") + ex.what() + "; binding again");
+      }
+    }
+  }
+
+  const auto t0 = std::chrono::steady_clock::now();
+  const MeanValueCage prepared(cage);
+  const int n = static_cast<int>(points.size());
+  const int m = prepared.vertexCount();
+  const double L = prepared.diagonal();
+  Eigen::AlignedBox3d box;
+  for (const auto& v : cage.vertices) box.extend(v);
+  const Vec3 centre = box.center();
+
+  bool sparse = options.storage == WeightStorage::Sparse ||
+                (options.storage == WeightStorage::Auto && m > options.denseMaxCageVertices);
+  const int threads = options.threads > 0 ? options.threads : omp_get_max_threads();
+
+  Embedding::DenseD dense;
+  std::vector<std::vector<std::pair<int, double>>> rows;
+  if (sparse) rows.resize(static_cast<std::size_t>(n));
+  else dense.resize(n, m);
+
+  // Per-point figures, reduced serially afterwards (deterministic).
+  std::vector<double> linErr(n, 0.0), linErr0(n, 0.0), pruneErr(n, 0.0), prunedL1(n, 0.0), cond(n, 1.0);
+  std::vector<char> onCage(n, 0), failed(n, 0);
+
+  const int block = 256;
+  for (int start = 0; start < n; start += block) {
+    const int end = std::min(n, start + block);
+#pragma omp parallel num_threads(threads)
+    {
+      MeanValueCage::Scratch scratch;
+      std::vector<double> w(static_cast<std::size_t>(m));
+      std::vector<Vec3> q;
+#pragma omp for schedule(static)
+      for (int i = start; i < end; ++i) {
+        const Vec3& x = points[static_cast<std::size_t>(i)];
+        MvcInfo info;
+        if (!prepared.weights(x, w.data(), scratch, &info)) failed[i] = 1;
+        cond[i] = info.conditioning;
+        onCage[i] = info.kind != MvcCase::General;
+        Vec3 p = Vec3::Zero();
+        for (int j = 0; j < m; ++j) p += w[j] * cage.vertices[j];
+        linErr0[i] = (p - x).norm() / L;
+        if (sparse) {
+          q.resize(static_cast<std::size_t>(m));
+          for (int j = 0; j < m; ++j) q[j] = (cage.vertices[j] - x) / L;
+          auto& row = rows[static_cast<std::size_t>(i)];
+          prunedL1[i] = pruneRow(row, w.data(), m, q, options.pruneThreshold);
+          Vec3 pp = Vec3::Zero();
+          for (const auto& [j, wj] : row) pp += wj * cage.vertices[j];
+          linErr[i] = (pp - x).norm() / L;
+          pruneErr[i] = (pp - p).norm() / L;
+        } else {
+          for (int j = 0; j < m; ++j) dense(i, j) = w[j];
+          linErr[i] = linErr0[i];
+        }
+      }
+    }
+    if (options.progress) options.progress(static_cast<std::size_t>(end), static_cast<std::size_t>(n));
+  }
+  for (int i = 0; i < n; ++i) {
+    if (failed[i]) {
+      std::ostringstream s;
+      s.precision(17);
+      s << "bind: mean value coordinates of point " << i << " (" << points[i].transpose()
+        << ") cannot be normalised (weight sum 0 or not finite)";
+      throw std::runtime_error(s.str());
+    }
+  }
+
+  Embedding e;
+  std::int64_t totalNnz = 0;
+  if (sparse) {
+    for (const auto& r : rows) totalNnz += static_cast<std::int64_t>(r.size());
+    if (options.storage == WeightStorage::Auto && 2 * totalNnz > static_cast<std::int64_t>(n) * m) {
+      sparse = false;  // pruning does not pay: recompute dense rows from the unpruned weights
+    }
+  }
+  if (sparse) {
+    std::vector<Eigen::Triplet<double>> trips;
+    trips.reserve(static_cast<std::size_t>(totalNnz));
+    for (int i = 0; i < n; ++i)
+      for (const auto& [j, wj] : rows[static_cast<std::size_t>(i)]) trips.emplace_back(i, j, wj);
+    Embedding::SparseD W(n, m);
+    W.setFromTriplets(trips.begin(), trips.end());
+    rows.clear();
+    rows.shrink_to_fit();
+    e = Embedding::fromSparse(std::move(W), options.keepDoublePrecision);
+  } else {
+    if (dense.rows() != n) {
+      // Auto fell back to dense after pruning: bind again unpruned (rare: tiny meshes).
+      BindOptions dopt = options;
+      dopt.storage = WeightStorage::Dense;
+      dopt.cacheDir.clear();
+      dopt.progress = nullptr;
+      Embedding d = bindMeanValue(points, cage, dopt);
+      e = std::move(d);
+      const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      e.stats().seconds = secs;
+      if (!cachePath.empty()) {
+        try {
+          e.save(cachePath, key);
+        } catch (const std::exception& ex) {
+          warn(std::string("could not write bind cache: ") + ex.what());
+        }
+      }
+      return e;
+    }
+    e = Embedding::fromDense(std::move(dense), options.keepDoublePrecision);
+  }
+
+  BindStats& st = e.stats();
+  st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  st.threads = threads;
+  st.fromCache = false;
+  st.nonZeros = e.nonZeros();
+  st.minWeight = std::numeric_limits<double>::infinity();
+  st.maxWeight = -std::numeric_limits<double>::infinity();
+  std::vector<std::pair<int, double>> row;
+  for (int i = 0; i < n; ++i) {
+    e.rowWeights(i, row);
+    double sum = 0.0;
+    for (const auto& [j, wj] : row) {
+      sum += wj;
+      st.minWeight = std::min(st.minWeight, wj);
+      st.maxWeight = std::max(st.maxWeight, wj);
+      if (wj < 0.0) ++st.negativeCount;
+    }
+    st.maxSumError = std::max(st.maxSumError, std::abs(sum - 1.0));
+    st.maxLinearError = std::max(st.maxLinearError, linErr[i]);
+    st.unprunedLinearError = std::max(st.unprunedLinearError, linErr0[i]);
+    st.pruningError = std::max(st.pruningError, pruneErr[i]);
+    st.maxPrunedL1 = std::max(st.maxPrunedL1, prunedL1[i]);
+    st.worstConditioning = std::max(st.worstConditioning, cond[i]);
+    if ((points[i] - centre).norm() > 4.0 * L) ++st.farPoints;
+    if (onCage[i]) ++st.onCagePoints;
+  }
+  if (n == 0) st.minWeight = st.maxWeight = 0.0;
+
+  if (!cachePath.empty()) {
+    try {
+      e.save(cachePath, key);
+    } catch (const std::exception& ex) {
+      warn(std::string("could not write bind cache: ") + ex.what());
+    }
+  }
+  return e;
+}
+
+}  // namespace sb::cage

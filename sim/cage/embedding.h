@@ -1,0 +1,118 @@
+// A mesh embedded in a cage: the weight matrix W (#mesh vertices × #cage vertices) that maps
+// cage positions to mesh positions, and the mean value coordinate bind that computes it.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+#include "sim/cage/triangle_mesh.h"
+#include "sim/types.h"
+
+namespace sb::cage {
+
+// Figures about a bind, filled by bindMeanValue (and kept in the cache file).
+struct BindStats {
+  double seconds = 0.0;              // wall time of the weight computation (0 when cached)
+  int threads = 1;                   // OpenMP threads used
+  bool fromCache = false;
+  double minWeight = 0.0, maxWeight = 0.0;  // over the stored weights
+  std::int64_t negativeCount = 0;    // stored weights < 0 (kept, never clamped)
+  double maxSumError = 0.0;          // max_i |Σ_j W_ij − 1| (stored weights)
+  double maxLinearError = 0.0;       // max_i |Σ_j W_ij v_j − x_i| / cage diagonal (stored weights)
+  double unprunedLinearError = 0.0;  // the same before pruning
+  double pruningError = 0.0;         // max_i |Σ_j (W_pruned − W)_ij v_j| / cage diagonal (rest pose)
+  double maxPrunedL1 = 0.0;          // max_i Σ_j |W_pruned − W|_ij: bound on the pruning error of a
+                                     // deformed pose relative to its largest non-affine cage motion
+  std::int64_t nonZeros = 0;
+  double worstConditioning = 1.0;    // max cancellation factor (see MvcInfo); error ≈ 1e-16 × this
+  std::int64_t farPoints = 0;        // points farther than 4× the cage diagonal from the cage centre
+  std::int64_t onCagePoints = 0;     // points evaluated as on a cage vertex/edge/face
+};
+
+enum class WeightStorage { Auto, Dense, Sparse };
+
+struct BindOptions {
+  int threads = 0;  // OpenMP threads for the bind (0 = OpenMP default)
+  // Auto: dense when the cage has at most denseMaxCageVertices vertices; otherwise pruned and
+  // sparse, unless pruning keeps more than half the entries (then dense, unpruned).
+  WeightStorage storage = WeightStorage::Auto;
+  int denseMaxCageVertices = 256;
+  // Sparse pruning: in each row drop |w_j| < pruneThreshold · max_k |w_k|, then add to the kept
+  // weights the minimum-norm correction (weighted by |w_j|) that restores both Σw = 1 and linear
+  // precision Σ w_j v_j = x exactly (see README.md).
+  double pruneThreshold = 1e-3;
+  bool keepDoublePrecision = true;  // keep the double weights (rowWeights, deformDouble); float always
+  std::string cacheDir;             // empty = no cache
+  // Called from the calling thread after each block of points: (points done, total).
+  std::function<void(std::size_t, std::size_t)> progress;
+  // Cache problems (corrupt file, cannot write). Default: print to stderr.
+  std::function<void(const std::string&)> warning;
+};
+
+class Embedding {
+ public:
+  using SparseD = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
+  using SparseF = Eigen::SparseMatrix<float, Eigen::RowMajor, int>;
+  using DenseD = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  using DenseF = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+  Embedding() = default;
+  // Any linear embedding (e.g. other coordinate types) can be wrapped.
+  static Embedding fromDense(DenseD weights, bool keepDouble = true);
+  static Embedding fromSparse(SparseD weights, bool keepDouble = true);
+
+  int meshVertexCount() const { return rows_; }
+  int cageVertexCount() const { return cols_; }
+  bool isSparse() const { return sparse_; }
+  std::int64_t nonZeros() const;
+  bool hasDoubleWeights() const { return hasDouble_; }
+
+  // out = W · cagePositions (#mesh × 3), float, one matrix product.
+  void deform(ConstPointsRef cagePositions, PointsRowMajor& out) const;
+  // The same in double (uses the double weights when kept, else the float ones).
+  void deformDouble(const Eigen::Matrix<double, Eigen::Dynamic, 3>& cagePositions,
+                    Eigen::Matrix<double, Eigen::Dynamic, 3>& out) const;
+  // Nonzeros (cage vertex, weight) of row meshVertex, ascending cage index.
+  void rowWeights(int meshVertex, std::vector<std::pair<int, double>>& out) const;
+
+  const BindStats& stats() const { return stats_; }
+  BindStats& stats() { return stats_; }
+  double pruningError() const { return stats_.pruningError; }
+
+  // Binary file (format in README.md) with a checksum; save is atomic (temp file + rename).
+  // load throws std::runtime_error on any inconsistency (bad magic, size, checksum, index).
+  void save(const std::string& path, const std::array<std::uint64_t, 2>& key = {0, 0}) const;
+  static Embedding load(const std::string& path, std::array<std::uint64_t, 2>* key = nullptr);
+
+ private:
+  void makeFloat();
+
+  int rows_ = 0, cols_ = 0;
+  bool sparse_ = false;
+  bool hasDouble_ = false;
+  DenseD denseD_;
+  DenseF denseF_;
+  SparseD sparseD_;
+  SparseF sparseF_;
+  BindStats stats_;
+};
+
+// The cache key: a 128-bit hash of the points, the cage vertices and triangles and the options
+// that change the result (storage rule, threshold, precision), plus the file format version.
+std::array<std::uint64_t, 2> bindCacheKey(const std::vector<Eigen::Vector3d>& points, const TriangleMesh& cage,
+                                          const BindOptions& options);
+std::string bindCachePath(const std::string& cacheDir, const std::array<std::uint64_t, 2>& key);
+
+// Validates the cage (throws CageError), then computes mean value coordinates of every point.
+// With options.cacheDir set, reuses a cached bind with the same key, else binds and writes it.
+Embedding bindMeanValue(const std::vector<Eigen::Vector3d>& points, const TriangleMesh& cage,
+                        const BindOptions& options = {});
+
+}  // namespace sb::cage
