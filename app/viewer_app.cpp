@@ -67,6 +67,11 @@ glm::vec3 toGlm(const Vec3& v) {
 ViewerApp::ViewerApp(const ViewerOptions& options, Scene scene)
     : options_(options), scene_(std::move(scene)) {
   paused_ = options_.startPaused;
+  const std::string show = "," + options_.show + ",";
+  showParticles_ = show.find(",particles,") != std::string::npos;
+  showCage_ = show.find(",cage,") != std::string::npos;
+  showClusters_ = show.find(",clusters,") != std::string::npos;
+  showGoals_ = show.find(",goals,") != std::string::npos;
   scenePathInput_ = scene_.path;
   savePathInput_ = scene_.path;
   screenshotPathInput_ = "softbody_screenshot.png";
@@ -180,6 +185,11 @@ void ViewerApp::frameCamera() {
   camera_.frame(lo, hi);
   camera_.nearPlane = 0.01f * sceneSize_;
   camera_.farPlane = 200.0f * sceneSize_;
+  // Centre the scene in the part of the window the panel leaves free.
+  if (!options_.hideUi) {
+    const int height = windowHeight_ > 0 ? windowHeight_ : options_.height;
+    camera_.pan(0.5f * kPanelWidth, 0.0f, static_cast<float>(height));
+  }
 }
 
 float ViewerApp::groundHeight() const {

@@ -58,6 +58,9 @@ struct FrameTimings {
   double lastSim = 0, lastDeform = 0, lastRender = 0, lastFrame = 0;
 };
 
+// Width of the ImGui control panel on the left of the window, pixels.
+constexpr float kPanelWidth = 340.0f;
+
 class ViewerApp {
  public:
   ViewerApp(const ViewerOptions& options, Scene scene);

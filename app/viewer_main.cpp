@@ -8,6 +8,7 @@
 #include "app/commands.h"
 #include "app/viewer_headless.h"
 #include "app/viewer_options.h"
+#include "sim/parallel.h"
 #include "sim/scene.h"
 
 #ifdef SOFTBODY_HAVE_VIEWER
@@ -59,6 +60,21 @@ int runViewerCommand(int argc, char** argv) {
   cli.add_option("--fps-cap", options.fpsCap, "frames per second at most (0: uncapped)")
       ->check(CLI::NonNegativeNumber);
   cli.add_option("--size", size, "window size WxH in pixels");
+  cli.add_option("--sim-threads", options.simThreads,
+                 "simulation threads while the window is open (0: all cores)")
+      ->check(CLI::NonNegativeNumber);
+  cli.add_option("--show", options.show,
+                 "overlays to switch on, comma separated: particles,cage,clusters,goals")
+      ->check([](const std::string& text) {
+        std::string rest = text + ",";
+        for (std::size_t at; (at = rest.find(',')) != std::string::npos; rest.erase(0, at + 1)) {
+          const std::string item = rest.substr(0, at);
+          if (!item.empty() && item != "particles" && item != "cage" && item != "clusters" &&
+              item != "goals")
+            return "unknown overlay '" + item + "' (particles, cage, clusters, goals)";
+        }
+        return std::string();
+      });
   cli.add_flag("--paused", options.startPaused, "start with the simulation paused");
   cli.add_flag("--hide-bodies", options.hideBodies, "do not draw the body meshes (for tests)");
   cli.add_flag("--no-ui", options.hideUi, "hide the control panel");
@@ -94,6 +110,7 @@ int runViewerCommand(int argc, char** argv) {
     return runViewerHeadless(scene, options);
   }
 
+  setThreadCount(options.simThreads);
   int code = 0;
   {
     ViewerApp app(options, std::move(scene));

@@ -82,7 +82,7 @@ void ViewerApp::writeStats(const std::string& path) const {
         const glm::vec2 pixel = centrePixel + 4.0f * static_cast<float>(ring) *
                                                   glm::vec2(std::cos(angle), std::sin(angle));
         if (pixel.x < 0 || pixel.y < 0 || pixel.x >= w || pixel.y >= h) continue;
-        if (!options_.hideUi && pixel.x < 350.0f) continue;  // under the panel
+        if (!options_.hideUi && pixel.x < kPanelWidth + 10.0f) continue;  // under the panel
         const render::Ray ray = camera_.rayThroughPixel(pixel.x, pixel.y, w, h);
         int nearest = -1;
         float best = std::numeric_limits<float>::infinity();

@@ -14,8 +14,6 @@ namespace sb::app {
 
 namespace {
 
-constexpr float kPanelWidth = 340.0f;
-
 void tooltip(const char* text) {
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", text);
 }

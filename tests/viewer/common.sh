@@ -2,6 +2,9 @@
 set -euo pipefail
 
 XVFB_SERVER_ARGS="-screen 0 1280x720x24"
+# The scene: the default one unless VIEWER_TEST_SCENE names another (for trying other scenes).
+SCENE_ARGS=()
+if [ -n "${VIEWER_TEST_SCENE:-}" ]; then SCENE_ARGS=("$VIEWER_TEST_SCENE"); fi
 
 fail() {
   echo "FAIL: $*" >&2

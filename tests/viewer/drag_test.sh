@@ -12,7 +12,7 @@ fi
 
 FRAMES=300
 start_viewer() {  # start_viewer STATS
-  "$SOFTBODY" --frames $FRAMES --stats "$1" --stats-every 5 >"$WORK/viewer.log" 2>&1 &
+  "$SOFTBODY" ${SCENE_ARGS[@]+"${SCENE_ARGS[@]}"} --frames $FRAMES --stats "$1" --stats-every 5 >"$WORK/viewer.log" 2>&1 &
   VIEWER_PID=$!
 }
 

@@ -5,7 +5,7 @@ SOFTBODY=$1 CHECK=$2 WORK=$3
 source "$(dirname "$0")/common.sh"
 mkdir -p "$WORK"
 code=0
-env -u DISPLAY -u WAYLAND_DISPLAY "$SOFTBODY" --frames 120 --stats "$WORK/headless.json" \
+env -u DISPLAY -u WAYLAND_DISPLAY "$SOFTBODY" ${SCENE_ARGS[@]+"${SCENE_ARGS[@]}"} --frames 120 --stats "$WORK/headless.json" \
   >"$WORK/out.txt" 2>&1 </dev/null || code=$?
 cat "$WORK/out.txt"
 [ "$code" -eq 0 ] || fail "exit code $code"

@@ -10,7 +10,7 @@ if [ "${INNER:-0}" != 1 ]; then
   INNER=1 exec xvfb-run -a -s "$XVFB_SERVER_ARGS" bash "$0" "$@" </dev/null
 fi
 
-"$SOFTBODY" --frames 200 --stats "$WORK/live.json" --stats-every 5 >"$WORK/viewer.log" 2>&1 &
+"$SOFTBODY" ${SCENE_ARGS[@]+"${SCENE_ARGS[@]}"} --frames 200 --stats "$WORK/live.json" --stats-every 5 >"$WORK/viewer.log" 2>&1 &
 VIEWER_PID=$!
 snapshot "$WORK/live.json" 10 "$WORK/running0.json"
 snapshot "$WORK/live.json" 30 "$WORK/running1.json"

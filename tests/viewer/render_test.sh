@@ -7,7 +7,7 @@ source "$(dirname "$0")/common.sh"
 mkdir -p "$WORK"
 rm -f "$WORK"/*.png "$WORK"/*.json
 run() {
-  xvfb-run -a -s "$XVFB_SERVER_ARGS" "$SOFTBODY" --frames 90 --size 1280x720 "$@" </dev/null
+  xvfb-run -a -s "$XVFB_SERVER_ARGS" "$SOFTBODY" ${SCENE_ARGS[@]+"${SCENE_ARGS[@]}"} --frames 90 --size 1280x720 "$@" </dev/null
 }
 run --screenshot "$WORK/shot.png" --stats "$WORK/shot.json" >"$WORK/shot.log" 2>&1 ||
   { cat "$WORK/shot.log"; fail "viewer run failed"; }

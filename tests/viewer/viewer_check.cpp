@@ -158,7 +158,8 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (command == "grab-pixel" && argc == 4) {
-      const json& p = readJson(argv[2]).at("bodies").at(std::stoi(argv[3])).at("grabPixel");
+      const json stats = readJson(argv[2]);
+      const json& p = stats.at("bodies").at(std::stoi(argv[3])).at("grabPixel");
       if (p.is_null()) {
         std::fprintf(stderr, "no pixel hits body %s\n", argv[3]);
         return 1;
@@ -167,7 +168,8 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (command == "pause-point" && argc == 3) {
-      const json& r = readJson(argv[2]).at("pauseCheckbox");
+      const json stats = readJson(argv[2]);
+      const json& r = stats.at("pauseCheckbox");
       // The checkbox square sits at the left of the item: click inside it.
       const double h = r[3].get<double>() - r[1].get<double>();
       std::printf("%d %d\n", static_cast<int>(r[0].get<double>() + 0.5 * h),
