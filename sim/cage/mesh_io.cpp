@@ -102,9 +102,10 @@ std::string lowerExtension(const std::string& path) {
   return ext;
 }
 
-// OpenMesh's OBJ reader skips malformed lines silently; check the lines it would use first so
-// errors carry a line number.
-void precheckObj(const std::string& path) {
+// OpenMesh's OBJ reader skips malformed lines silently and reads coordinates as float: check
+// the lines it will use first (errors with a line number) and keep the double coordinates.
+std::vector<Eigen::Vector3d> precheckObj(const std::string& path) {
+  std::vector<Eigen::Vector3d> coords;
   std::ifstream in(path);
   std::string line;
   int lineNo = 0;
@@ -118,6 +119,7 @@ void precheckObj(const std::string& path) {
       double x, y, z;
       if (!(ls >> x >> y >> z))
         throw MeshError(path + ": line " + std::to_string(lineNo) + ": vertex needs three numbers: '" + line + "'");
+      coords.emplace_back(x, y, z);
       ++vertexCount;
     } else if (tag == "f") {
       std::string item;
@@ -137,6 +139,7 @@ void precheckObj(const std::string& path) {
         throw MeshError(path + ": line " + std::to_string(lineNo) + ": face needs at least 3 vertices");
     }
   }
+  return coords;
 }
 
 }  // namespace
@@ -151,7 +154,8 @@ TriangleMesh readMesh(const std::string& path) {
   const std::string ext = lowerExtension(path);
   if (ext != "obj" && ext != "off" && ext != "ply" && ext != "stl")
     throw MeshError(path + ": unsupported mesh format '" + ext + "' (expected .obj, .off, .ply or .stl)");
-  if (ext == "obj") precheckObj(path);
+  std::vector<Eigen::Vector3d> objCoords;
+  if (ext == "obj") objCoords = precheckObj(path);
 
   RawImporter importer;
   OpenMesh::IO::Options options;
@@ -161,6 +165,8 @@ TriangleMesh readMesh(const std::string& path) {
 
   TriangleMesh mesh;
   mesh.vertices = std::move(importer.vertices);
+  // OBJ: the same vertices in the same order, in full double precision.
+  if (ext == "obj" && objCoords.size() == mesh.vertices.size()) mesh.vertices = std::move(objCoords);
   std::vector<int> remap(mesh.vertices.size());
   for (std::size_t i = 0; i < remap.size(); ++i) remap[i] = static_cast<int>(i);
   if (ext == "stl") {

@@ -46,6 +46,8 @@ class MeanValueCage {
   struct Scratch {
     std::vector<double> ux, uy, uz, invd, d;
     std::vector<double> theta, s, nx, ny, nz;
+    std::vector<double> w0, w1, w2;  // per-triangle contributions
+    std::vector<int> nearPlane;      // per-triangle: needs the careful path
   };
 
   // Writes the vertexCount() normalised weights of x into w (Σw = 1, Σ w_j v_j = x).
@@ -67,6 +69,10 @@ class MeanValueCage {
   std::vector<double> vx_, vy_, vz_;
   std::vector<std::array<int, 2>> edges_;  // (a, b), a < b
   std::vector<Tri> tris_;
+  // Structure-of-arrays copies for the vectorised passes.
+  std::vector<int> ea_, eb_;
+  std::vector<int> tv0_, tv1_, tv2_, te0_, te1_, te2_;
+  std::vector<double> ts0_, ts1_, ts2_, tnx_, tny_, tnz_, tarea_;
   double diagonal_ = 0.0;
   Eigen::Vector3d centre_ = Eigen::Vector3d::Zero();
 };

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include <Eigen/Geometry>
+
 namespace sb::cage {
 
 void computeVertexNormals(const std::vector<std::array<int, 3>>& triangles,
