@@ -118,6 +118,7 @@ bool ViewerApp::open(std::string* error) {
   io.IniFilename = nullptr;  // no imgui.ini: the layout is fixed and tests must not depend on one
   ImGui::StyleColorsDark();
   ImGui::GetStyle().WindowRounding = 0.0f;
+  ImGui::GetStyle().Colors[ImGuiCol_WindowBg].w = 1.0f;  // opaque: nothing is drawn behind it
   ImGui_ImplGlfw_InitForOpenGL(window_, true);
   ImGui_ImplOpenGL3_Init("#version 330 core");
   imguiReady_ = true;
@@ -185,11 +186,6 @@ void ViewerApp::frameCamera() {
   camera_.frame(lo, hi);
   camera_.nearPlane = 0.01f * sceneSize_;
   camera_.farPlane = 200.0f * sceneSize_;
-  // Centre the scene in the part of the window the panel leaves free.
-  if (!options_.hideUi) {
-    const int height = windowHeight_ > 0 ? windowHeight_ : options_.height;
-    camera_.pan(0.5f * kPanelWidth, 0.0f, static_cast<float>(height));
-  }
 }
 
 float ViewerApp::groundHeight() const {
@@ -353,12 +349,18 @@ void ViewerApp::renderFrame() {
   glViewport(0, 0, framebufferWidth_, framebufferHeight_);
   glClearColor(0.16f, 0.17f, 0.20f, 1.0f);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  // The scene is drawn right of the panel only (the panel is opaque): fewer pixels to shade.
+  const ViewRect rect = viewRect();
+  const float toFramebuffer =
+      static_cast<float>(framebufferWidth_) / static_cast<float>(std::max(windowWidth_, 1));
+  glViewport(static_cast<GLint>(rect.x * toFramebuffer), 0,
+             static_cast<GLsizei>(rect.width * toFramebuffer),
+             static_cast<GLsizei>(rect.height * toFramebuffer));
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
   glDisable(GL_CULL_FACE);
 
-  const float aspect =
-      static_cast<float>(framebufferWidth_) / static_cast<float>(std::max(framebufferHeight_, 1));
+  const float aspect = rect.width / rect.height;
   const glm::mat4 view = camera_.view();
   const glm::mat4 projection = camera_.projection(aspect);
   const glm::mat4 viewProjection = projection * view;
@@ -369,7 +371,7 @@ void ViewerApp::renderFrame() {
   const float decade = std::pow(10.0f, std::floor(std::log10(raw)));
   const float mantissa = raw / decade;
   const float cell = decade * (mantissa < 1.5f ? 1.0f : mantissa < 3.5f ? 2.0f : 5.0f);
-  groundRenderer_->draw(viewProjection, eye, groundHeight(), cell, 12.0f * sceneSize_);
+  groundRenderer_->draw(viewProjection, eye, groundHeight(), cell, 5.0f * sceneSize_);
 
   meshRenderer_->begin(view, projection, eye);
   for (BodyView& v : views_) {
@@ -380,6 +382,7 @@ void ViewerApp::renderFrame() {
   debugDraw_->flush(viewProjection, 1.0f, true);
   drawOverlays(*debugDraw_);
   debugDraw_->flush(viewProjection, 6.0f, !(showParticles_ || showGoals_));
+  glViewport(0, 0, framebufferWidth_, framebufferHeight_);
 }
 
 bool ViewerApp::takeScreenshot(const std::string& path) {

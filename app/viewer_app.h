@@ -100,6 +100,13 @@ class ViewerApp {
   void updateDragTarget();
   void endDrag();
   render::Ray rayAtCursor(double x, double y) const;
+  // The 3D view: the window right of the panel (window pixels, origin top left).
+  struct ViewRect {
+    float x = 0, y = 0, width = 1, height = 1;
+  };
+  ViewRect viewRect() const;
+  // Window pixel of a world point; false when behind the eye.
+  bool projectToWindow(const glm::vec3& point, glm::vec2* pixel) const;
 
   // ---- viewer_ui.cpp ----
   void drawUi();

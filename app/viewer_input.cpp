@@ -51,10 +51,28 @@ void ViewerApp::installCallbacks() {
   });
 }
 
+ViewerApp::ViewRect ViewerApp::viewRect() const {
+  ViewRect r;
+  const float panel = options_.hideUi ? 0.0f : kPanelWidth;
+  const int width = windowWidth_ > 0 ? windowWidth_ : options_.width;
+  const int height = windowHeight_ > 0 ? windowHeight_ : options_.height;
+  r.x = std::min(panel, static_cast<float>(width) - 1.0f);
+  r.width = std::max(static_cast<float>(width) - r.x, 1.0f);
+  r.height = static_cast<float>(std::max(height, 1));
+  return r;
+}
+
 render::Ray ViewerApp::rayAtCursor(double x, double y) const {
-  return camera_.rayThroughPixel(static_cast<float>(x), static_cast<float>(y),
-                                 static_cast<float>(std::max(windowWidth_, 1)),
-                                 static_cast<float>(std::max(windowHeight_, 1)));
+  const ViewRect r = viewRect();
+  return camera_.rayThroughPixel(static_cast<float>(x) - r.x, static_cast<float>(y) - r.y, r.width,
+                                 r.height);
+}
+
+bool ViewerApp::projectToWindow(const glm::vec3& point, glm::vec2* pixel) const {
+  const ViewRect r = viewRect();
+  if (!camera_.project(point, r.width, r.height, pixel)) return false;
+  *pixel += glm::vec2(r.x, r.y);
+  return true;
 }
 
 void ViewerApp::onMouseButton(int button, int action, int mods) {
@@ -159,8 +177,7 @@ void ViewerApp::beginDrag(double x, double y, bool nearestParticle) {
       for (int k = 0; k < p.rows(); ++k) {
         const glm::vec3 q(p(k, 0), p(k, 1), p(k, 2));
         glm::vec2 pixel;
-        if (!camera_.project(q, static_cast<float>(windowWidth_), static_cast<float>(windowHeight_), &pixel))
-          continue;
+        if (!projectToWindow(q, &pixel)) continue;
         const float d = glm::length(pixel - glm::vec2(static_cast<float>(x), static_cast<float>(y)));
         if (d < best) {
           best = d;

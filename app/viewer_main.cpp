@@ -61,7 +61,7 @@ int runViewerCommand(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   cli.add_option("--size", size, "window size WxH in pixels");
   cli.add_option("--sim-threads", options.simThreads,
-                 "simulation threads while the window is open (0: all cores)")
+                 "simulation threads (0: all cores); 1 by default, as llvmpipe renders on the same cores")
       ->check(CLI::NonNegativeNumber);
   cli.add_option("--show", options.show,
                  "overlays to switch on, comma separated: particles,cage,clusters,goals")
@@ -96,9 +96,11 @@ int runViewerCommand(int argc, char** argv) {
   }
 
 #ifndef SOFTBODY_HAVE_VIEWER
+  setThreadCount(options.simThreads);
   std::printf("softbody: no display: running headless (built without the viewer)\n");
   return runViewerHeadless(scene, options);
 #else
+  setThreadCount(options.simThreads);
   const char* display = std::getenv("DISPLAY");
   const char* wayland = std::getenv("WAYLAND_DISPLAY");
   const bool haveDisplay = (display && *display) || (wayland && *wayland);
@@ -110,7 +112,6 @@ int runViewerCommand(int argc, char** argv) {
     return runViewerHeadless(scene, options);
   }
 
-  setThreadCount(options.simThreads);
   int code = 0;
   {
     ViewerApp app(options, std::move(scene));

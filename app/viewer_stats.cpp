@@ -65,14 +65,14 @@ void ViewerApp::writeStats(const std::string& path) const {
     glm::vec2 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
     for (Eigen::Index r = 0; r < v.vertices.rows(); ++r) {
       glm::vec2 pixel;
-      if (camera_.project(glm::vec3(v.vertices(r, 0), v.vertices(r, 1), v.vertices(r, 2)), w, h, &pixel)) {
+      if (projectToWindow(glm::vec3(v.vertices(r, 0), v.vertices(r, 1), v.vertices(r, 2)), &pixel)) {
         lo = glm::min(lo, pixel);
         hi = glm::max(hi, pixel);
       }
     }
     b["screenBounds"] = {lo.x, lo.y, hi.x, hi.y};
     glm::vec2 centrePixel(-1.0f);
-    camera_.project(glm::vec3(c.x(), c.y(), c.z()), w, h, &centrePixel);
+    projectToWindow(glm::vec3(c.x(), c.y(), c.z()), &centrePixel);
     b["screenCentre"] = {centrePixel.x, centrePixel.y};
     // A pixel whose ray hits this body first: search outward from the projected centre.
     json grab = nullptr;
@@ -82,8 +82,8 @@ void ViewerApp::writeStats(const std::string& path) const {
         const glm::vec2 pixel = centrePixel + 4.0f * static_cast<float>(ring) *
                                                   glm::vec2(std::cos(angle), std::sin(angle));
         if (pixel.x < 0 || pixel.y < 0 || pixel.x >= w || pixel.y >= h) continue;
-        if (!options_.hideUi && pixel.x < kPanelWidth + 10.0f) continue;  // under the panel
-        const render::Ray ray = camera_.rayThroughPixel(pixel.x, pixel.y, w, h);
+        if (pixel.x < viewRect().x + 4.0f) continue;  // under the panel
+        const render::Ray ray = rayAtCursor(pixel.x, pixel.y);
         int nearest = -1;
         float best = std::numeric_limits<float>::infinity();
         for (std::size_t o = 0; o < views_.size(); ++o) {
