@@ -151,35 +151,60 @@ double pruneRow(std::vector<std::pair<int, double>>& row, const double* w, int m
   for (int j = 0; j < m; ++j) maxAbs = std::max(maxAbs, std::abs(w[j]));
   const double cut = threshold * maxAbs;
   row.clear();
-  Eigen::Vector4d r = Eigen::Vector4d::Zero();  // dropped mass and moment
-  double dropped = 0.0;
+  std::vector<std::pair<double, int>> droppedList;  // (|w|, j)
   for (int j = 0; j < m; ++j) {
-    if (std::abs(w[j]) >= cut && w[j] != 0.0) {
-      row.emplace_back(j, w[j]);
-    } else {
-      r += w[j] * Eigen::Vector4d(1.0, q[j].x(), q[j].y(), q[j].z());
-      dropped += std::abs(w[j]);
-    }
+    if (std::abs(w[j]) >= cut && w[j] != 0.0) row.emplace_back(j, w[j]);
+    else if (w[j] != 0.0) droppedList.emplace_back(std::abs(w[j]), j);
   }
-  if (dropped == 0.0) return 0.0;
-  // Weighted minimum-norm correction: δ = D Aᵀ (A D Aᵀ)⁻¹ r, D = diag|w_j|, A's columns (1, q_j).
+  if (droppedList.empty()) return 0.0;
+  auto column = [&](int j) { return Eigen::Vector4d(1.0, q[j].x(), q[j].y(), q[j].z()); };
+  // The kept vertices must span 3D (well conditioned) for the correction to exist: if they do
+  // not, keep the largest dropped weights too, one at a time.
+  std::sort(droppedList.begin(), droppedList.end(), [](const auto& a, const auto& b) {
+    return a.first > b.first || (a.first == b.first && a.second < b.second);
+  });
+  std::size_t nextDropped = 0;
   Eigen::Matrix4d M = Eigen::Matrix4d::Zero();
-  for (const auto& [j, wj] : row) {
-    const Eigen::Vector4d a(1.0, q[j].x(), q[j].y(), q[j].z());
-    M += std::abs(wj) * a * a.transpose();
+  for (const auto& [j, wj] : row) M += std::abs(wj) * column(j) * column(j).transpose();
+  Eigen::FullPivLU<Eigen::Matrix4d> lu;
+  lu.setThreshold(1e-10);
+  while (true) {
+    lu.compute(M);
+    if (lu.rank() == 4 || nextDropped == droppedList.size()) break;
+    const int j = droppedList[nextDropped++].second;
+    row.emplace_back(j, w[j]);
+    M += std::abs(w[j]) * column(j) * column(j).transpose();
   }
-  Eigen::FullPivLU<Eigen::Matrix4d> lu(M);
-  double change = dropped;
+  std::sort(row.begin(), row.end());
+  Eigen::Vector4d r = Eigen::Vector4d::Zero();  // dropped mass and moment
+  double change = 0.0;
+  for (std::size_t k = nextDropped; k < droppedList.size(); ++k) {
+    const int j = droppedList[k].second;
+    r += w[j] * column(j);
+    change += std::abs(w[j]);
+  }
+  if (change == 0.0) return 0.0;
   if (lu.rank() == 4) {
-    const Eigen::Vector4d lambda = lu.solve(r);
-    for (auto& [j, wj] : row) {
-      const Eigen::Vector4d a(1.0, q[j].x(), q[j].y(), q[j].z());
-      const double delta = std::abs(wj) * a.dot(lambda);
-      wj += delta;
-      change += std::abs(delta);
+    // Weighted minimum-norm correction: δ = D Aᵀ (A D Aᵀ)⁻¹ r, D = diag|w_j|, A's columns (1, q_j).
+    // Two refinement passes on the residual keep Σw and Σ w q exact when M is ill-conditioned.
+    std::vector<double> scale(row.size());
+    for (std::size_t k = 0; k < row.size(); ++k) scale[k] = std::abs(row[k].second);
+    std::vector<double> delta(row.size(), 0.0);
+    Eigen::Vector4d residual = r;
+    for (int pass = 0; pass < 3; ++pass) {
+      const Eigen::Vector4d lambda = lu.solve(residual);
+      for (std::size_t k = 0; k < row.size(); ++k) {
+        const double d = scale[k] * column(row[k].first).dot(lambda);
+        delta[k] += d;
+        residual -= d * column(row[k].first);
+      }
+    }
+    for (std::size_t k = 0; k < row.size(); ++k) {
+      row[k].second += delta[k];
+      change += std::abs(delta[k]);
     }
   } else {
-    // Kept vertices do not span 3D: restore Σw = 1 only, proportionally to |w|.
+    // Cannot happen for a valid cage (all vertices span 3D); restore Σw = 1 only.
     double keptAbs = 0.0;
     for (const auto& e : row) keptAbs += std::abs(e.second);
     for (auto& [j, wj] : row) {
