@@ -1,0 +1,172 @@
+// The softbody bind / deform commands, run as a separate process (SOFTBODY_EXE).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <Eigen/Dense>
+
+#include "sim/cage/embedding.h"
+#include "sim/cage/mesh_io.h"
+#include "tests/cage/cage_fixtures.h"
+
+namespace sb::cage {
+namespace {
+
+namespace fs = std::filesystem;
+using Vec3 = Eigen::Vector3d;
+
+struct ProcessResult {
+  int code = -1;
+  std::string out, err;
+};
+
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("sb_cage_cli_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string path(const std::string& n) const { return (dir_ / n).string(); }
+  static std::string slurp(const std::string& p) {
+    std::ifstream f(p);
+    std::stringstream s;
+    s << f.rdbuf();
+    return s.str();
+  }
+  ProcessResult run(const std::string& args) const {
+    const std::string cmd = std::string("'") + SOFTBODY_EXE + "' " + args + " > '" + path("stdout.txt") + "' 2> '" +
+                            path("stderr.txt") + "'";
+    const int status = std::system(cmd.c_str());
+    ProcessResult r;
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = slurp(path("stdout.txt"));
+    r.err = slurp(path("stderr.txt"));
+    return r;
+  }
+  fs::path dir_;
+};
+
+const std::string kMeshDir = SOFTBODY_TEST_MESH_DIR;
+
+TEST_F(Cli, BindReportsStatistics) {
+  const ProcessResult r = run("bind --mesh " + kMeshDir + "/bunny.obj --cage " + kMeshDir + "/bunny_cage.obj --threads 2 --out " +
+                    path("w.sbw"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  for (const char* key : {"time:", "storage:", "nonzeros", "min ", "max ", "negative", "sum error:",
+                          "linear precision:", "dense"})
+    EXPECT_NE(r.out.find(key), std::string::npos) << key << "\n" << r.out;
+  EXPECT_NE(r.err.find("binding: 1839 / 1839"), std::string::npos) << r.err;  // progress on stderr
+  const Embedding e = Embedding::load(path("w.sbw"));
+  EXPECT_EQ(e.meshVertexCount(), 1839);
+  EXPECT_EQ(e.cageVertexCount(), 164);
+  EXPECT_LT(e.stats().maxLinearError, 1e-10);
+}
+
+TEST_F(Cli, BindUsesTheCache) {
+  const std::string args = "bind --mesh " + kMeshDir + "/suzanne.obj --cage " + kMeshDir +
+                           "/suzanne_cage.obj --storage sparse --cache-dir " + path("");
+  const ProcessResult a = run(args);
+  ASSERT_EQ(a.code, 0) << a.err;
+  EXPECT_NE(a.out.find("sparse"), std::string::npos);
+  EXPECT_NE(a.out.find("pruning:"), std::string::npos);
+  const ProcessResult b = run(args);
+  ASSERT_EQ(b.code, 0) << b.err;
+  EXPECT_NE(b.out.find("cached"), std::string::npos) << b.out;
+}
+
+TEST_F(Cli, DeformAppliesTheCageMotion) {
+  const TriangleMesh mesh = readMesh(kMeshDir + "/suzanne.obj");
+  const TriangleMesh cage = readMesh(kMeshDir + "/suzanne_cage.obj");
+  const Eigen::Matrix3d A = (Eigen::Matrix3d() << 0.9, 0.2, 0.0, -0.1, 1.1, 0.3, 0.05, 0.0, 0.8).finished();
+  const Vec3 t(1.0, 2.0, -0.5);
+  TriangleMesh moved = cage;
+  for (auto& v : moved.vertices) v = A * v + t;
+  writeObj(path("moved.obj"), moved);
+  // Also a vertices-only copy of the mesh.
+  TriangleMesh points;
+  points.vertices = mesh.vertices;
+  writeObj(path("points.obj"), points);
+  for (const std::string& m : {kMeshDir + "/suzanne.obj", path("points.obj")}) {
+    const ProcessResult r = run("deform --mesh " + m + " --cage " + kMeshDir + "/suzanne_cage.obj --deformed-cage " +
+                      path("moved.obj") + " --out " + path("out.obj"));
+    ASSERT_EQ(r.code, 0) << r.err;
+    const TriangleMesh out = readMesh(path("out.obj"));
+    ASSERT_EQ(out.vertices.size(), mesh.vertices.size());
+    EXPECT_EQ(out.triangles.size(), m == path("points.obj") ? 0u : mesh.triangles.size());
+    double err = 0.0;
+    for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
+      err = std::max(err, (out.vertices[i] - (A * mesh.vertices[i] + t)).norm());
+    EXPECT_LT(err / testing::diagonal(moved), 1e-10);
+  }
+}
+
+TEST_F(Cli, ErrorsAreClearAndNonZero) {
+  const std::string mesh = kMeshDir + "/bunny.obj", cage = kMeshDir + "/bunny_cage.obj";
+  // Missing file.
+  ProcessResult r = run("bind --mesh " + path("nope.obj") + " --cage " + cage);
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find(path("nope.obj")), std::string::npos) << r.err;
+  // Flipped triangle in the cage.
+  TriangleMesh c = readMesh(cage);
+  std::swap(c.triangles[17][0], c.triangles[17][1]);
+  writeObj(path("flipped.obj"), c);
+  r = run("bind --mesh " + mesh + " --cage " + path("flipped.obj"));
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("triangle 17 is flipped"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("flipped.obj"), std::string::npos) << r.err;
+  // Open cage in deform.
+  TriangleMesh open = readMesh(cage);
+  open.triangles.pop_back();
+  writeObj(path("open.obj"), open);
+  r = run("deform --mesh " + mesh + " --cage " + path("open.obj") + " --deformed-cage " + path("open.obj") +
+          " --out " + path("o.obj"));
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("not closed"), std::string::npos) << r.err;
+  // Mismatched deformed cage: vertex count, then faces.
+  TriangleMesh fewer = readMesh(cage);
+  fewer.vertices.pop_back();
+  writeObj(path("fewer.obj"), fewer);
+  r = run("deform --mesh " + mesh + " --cage " + cage + " --deformed-cage " + path("fewer.obj") + " --out " + path("o.obj"));
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("fewer.obj"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("163 vertices"), std::string::npos) << r.err;
+  TriangleMesh refaced = readMesh(cage);
+  std::rotate(refaced.triangles[5].begin(), refaced.triangles[5].begin() + 1, refaced.triangles[5].end());
+  std::swap(refaced.triangles[5], refaced.triangles[6]);
+  writeObj(path("refaced.obj"), refaced);
+  r = run("deform --mesh " + mesh + " --cage " + cage + " --deformed-cage " + path("refaced.obj") + " --out " +
+          path("o.obj"));
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("faces differ"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("o.obj")));
+  // Bad arguments.
+  r = run("bind --mesh " + mesh);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--cage"), std::string::npos) << r.err;
+  r = run("bind --mesh " + mesh + " --cage " + cage + " --threads -3");
+  EXPECT_EQ(r.code, 2);
+  r = run("deform --mesh " + mesh + " --cage " + cage + " --deformed-cage " + cage + " --out " + path("x.obj") +
+          " --storage weird");
+  EXPECT_EQ(r.code, 2);
+  // Unwritable output.
+  r = run("deform --mesh " + mesh + " --cage " + cage + " --deformed-cage " + cage + " --out " + path("no/dir/x.obj"));
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("no/dir/x.obj"), std::string::npos) << r.err;
+  // Help.
+  r = run("deform --help");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_NE(r.out.find("--deformed-cage"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace sb::cage
