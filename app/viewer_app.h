@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cstdint>
 #include <deque>
+#include <map>
 #include <memory>
 #include <string>
 #include <utility>
@@ -170,7 +171,10 @@ class ViewerApp {
   std::string scenePathInput_, savePathInput_, screenshotPathInput_;
 
   FrameTimings timings_;
-  std::array<float, 4> pauseButtonRect_{};  // window pixels x0, y0, x1, y1 (for tests)
+  // Window-pixel rectangles (x0, y0, x1, y1) of named panel controls in the last frame, written
+  // to the stats file so tests can click them.
+  std::map<std::string, std::array<float, 4>> widgetRects_;
+  void recordWidget(const char* name);
   long frame_ = 0;
   std::chrono::steady_clock::time_point start_;
 };

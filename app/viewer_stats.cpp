@@ -43,8 +43,12 @@ void ViewerApp::writeStats(const std::string& path) const {
                     {"total", 1e3 * p.total() / steps}};
   j["steps"] = timings_.steps;
   j["events"] = eventCount_;
-  j["pauseCheckbox"] = {pauseButtonRect_[0], pauseButtonRect_[1], pauseButtonRect_[2],
-                        pauseButtonRect_[3]};
+  j["error"] = errorMessage_;
+  j["status"] = statusMessage_;
+  j["scenePath"] = scene_.path;
+  json widgets = json::object();
+  for (const auto& [name, r] : widgetRects_) widgets[name] = {r[0], r[1], r[2], r[3]};
+  j["widgets"] = widgets;
   j["camera"] = {{"eye", vec(camera_.eye())},
                  {"right", vec(camera_.right())},
                  {"up", vec(camera_.up())},

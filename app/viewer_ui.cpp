@@ -30,6 +30,11 @@ bool sliderDouble(const char* label, double* value, float lo, float hi, const ch
 
 }  // namespace
 
+void ViewerApp::recordWidget(const char* name) {
+  const ImVec2 lo = ImGui::GetItemRectMin(), hi = ImGui::GetItemRectMax();
+  widgetRects_[name] = {lo.x, lo.y, hi.x, hi.y};
+}
+
 void ViewerApp::drawUi() {
   ImGui::SetNextWindowPos(ImVec2(0.0f, 0.0f), ImGuiCond_Always);
   ImGui::SetNextWindowSize(ImVec2(kPanelWidth, static_cast<float>(std::max(windowHeight_, 100))),
@@ -39,11 +44,9 @@ void ViewerApp::drawUi() {
   ImGui::PushItemWidth(-140.0f);
 
   // ---- run control (first row: its position is fixed for the tests) ----
+  widgetRects_.clear();
   ImGui::Checkbox("Pause", &paused_);
-  {
-    const ImVec2 lo = ImGui::GetItemRectMin(), hi = ImGui::GetItemRectMax();
-    pauseButtonRect_ = {lo.x, lo.y, hi.x, hi.y};
-  }
+  recordWidget("pause");
   tooltip("Stop or resume the simulation (key: space). Dragging and the camera keep working.");
   ImGui::SameLine();
   if (ImGui::Button("Step")) {
@@ -83,6 +86,9 @@ void ViewerApp::drawUi() {
     }
   }
 
+  const bool sceneOpen = ImGui::CollapsingHeader("Scene file");
+  recordWidget("sceneHeader");
+  if (sceneOpen) drawScenePanel();
   if (ImGui::CollapsingHeader("World", ImGuiTreeNodeFlags_DefaultOpen)) drawWorldPanel();
   if (ImGui::CollapsingHeader("Bodies", ImGuiTreeNodeFlags_DefaultOpen)) {
     for (std::size_t i = 0; i < scene_.bodies.size(); ++i) drawBodyPanel(static_cast<int>(i));
@@ -104,7 +110,6 @@ void ViewerApp::drawUi() {
     tooltip("Show static colliders other than the ground as wireframes.");
   }
   if (ImGui::CollapsingHeader("Timings", ImGuiTreeNodeFlags_DefaultOpen)) drawTimingPanel();
-  if (ImGui::CollapsingHeader("Scene")) drawScenePanel();
   if (ImGui::CollapsingHeader("Help")) {
     ImGui::TextWrapped(
         "Left drag: pull the surface point under the cursor.\n"
@@ -180,7 +185,10 @@ void ViewerApp::drawBodyPanel(int body) {
   ImGui::ColorButton("##colour", ImVec4(v.colour.r, v.colour.g, v.colour.b, 1.0f),
                      ImGuiColorEditFlags_NoTooltip, ImVec2(12, 12));
   ImGui::SameLine();
-  if (ImGui::TreeNodeEx(world.name(h).c_str(), body == 0 ? ImGuiTreeNodeFlags_DefaultOpen : 0)) {
+  const bool open =
+      ImGui::TreeNodeEx(world.name(h).c_str(), body == 0 ? ImGuiTreeNodeFlags_DefaultOpen : 0);
+  tooltip("Parameters of this body (its colour in the view on the left).");
+  if (open) {
     BodyParams p = world.params(h);
     bool changed = false;
     int mode = static_cast<int>(p.mode);
@@ -290,13 +298,17 @@ void ViewerApp::drawTimingPanel() {
 
 void ViewerApp::drawScenePanel() {
   ImGui::InputText("scene file", &scenePathInput_);
+  recordWidget("scenePath");
   tooltip("Path of a scene JSON file to open.");
   if (ImGui::Button("Open")) openScene(scenePathInput_);
+  recordWidget("open");
   tooltip("Open the scene file above. If it has an error, the message shows here and the "
           "current scene keeps running.");
   ImGui::InputText("save as", &savePathInput_);
+  recordWidget("savePath");
   tooltip("Path to save the current scene with its current parameters to.");
   if (ImGui::Button("Save")) saveCurrentScene(savePathInput_);
+  recordWidget("save");
   tooltip("Write the scene with the current world settings and body parameters "
           "(atomic: a temporary file renamed over the target).");
   ImGui::InputText("screenshot", &screenshotPathInput_);

@@ -41,3 +41,31 @@ finish_viewer() {
   VIEWER_PID=
   [ "$code" -eq 0 ] || { cat "$WORK/viewer.log" >&2; fail "the viewer exited with code $code"; }
 }
+
+# click_widget STATS NAME: a real mouse click on a panel control recorded in the stats file.
+click_widget() {
+  local x y
+  read -r x y < <("$CHECK" click-point "$1" "$2") || fail "control $2 not found in $1"
+  xdotool mousemove "$x" "$y"
+  sleep 0.15
+  xdotool click 1
+  sleep 0.15
+}
+
+# replace_text TEXT: selects all in the focused ImGui text field and types TEXT. Keys are held
+# for a moment: ImGui 1.86 polls key state once per frame.
+replace_text() {
+  xdotool keydown ctrl keydown a
+  sleep 0.15
+  xdotool keyup a keyup ctrl
+  sleep 0.1
+  xdotool type --delay 15 "$1"
+  sleep 0.1
+}
+
+# next_frame STATS [N]: waits N (default 10) frames past the current one.
+next_frames() {
+  local now
+  now=$("$CHECK" get "$1" /frame)
+  wait_for_frame "$1" $((now + ${2:-10}))
+}

@@ -19,7 +19,7 @@ t1=$("$CHECK" get "$WORK/running1.json" /simTime)
 [ "$t0" != "$t1" ] || fail "the simulation does not run before the click"
 [ "$("$CHECK" get "$WORK/running1.json" /paused)" = false ] || fail "paused before the click"
 
-read -r x y < <("$CHECK" pause-point "$WORK/running1.json")
+read -r x y < <("$CHECK" click-point "$WORK/running1.json" pause)
 echo "clicking Pause at pixel $x,$y"
 xdotool mousemove "$x" "$y"
 sleep 0.2

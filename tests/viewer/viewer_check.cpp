@@ -2,7 +2,7 @@
 //
 //   viewer_check get STATS /json/pointer        print a value (arrays: space separated)
 //   viewer_check grab-pixel STATS BODY           a window pixel that hits BODY: "x y"
-//   viewer_check pause-point STATS               centre of the Pause checkbox: "x y"
+//   viewer_check click-point STATS WIDGET        a pixel inside a recorded panel control: "x y"
 //   viewer_check visible SHOT.png EMPTY.png STATS
 //       every body's projected screen bounds differ from the same frame drawn without bodies
 //   viewer_check moved REF.json DRAG.json BODY MIN_METRES
@@ -167,10 +167,14 @@ int main(int argc, char** argv) {
       std::printf("%d %d\n", p[0].get<int>(), p[1].get<int>());
       return 0;
     }
-    if (command == "pause-point" && argc == 3) {
+    if (command == "click-point" && argc == 4) {
       const json stats = readJson(argv[2]);
-      const json& r = stats.at("pauseCheckbox");
-      // The checkbox square sits at the left of the item: click inside it.
+      if (!stats.at("widgets").contains(argv[3])) {
+        std::fprintf(stderr, "control '%s' not shown in the last frame\n", argv[3]);
+        return 1;
+      }
+      const json& r = stats.at("widgets").at(argv[3]);
+      // Half a row height in from the left edge: inside a checkbox's square, a button, a field.
       const double h = r[3].get<double>() - r[1].get<double>();
       std::printf("%d %d\n", static_cast<int>(r[0].get<double>() + 0.5 * h),
                   static_cast<int>(0.5 * (r[1].get<double>() + r[3].get<double>())));
