@@ -113,17 +113,30 @@ int runViewerCommand(int argc, char** argv) {
   }
 
   int code = 0;
+  bool windowFailed = false;
   {
     ViewerApp app(options, std::move(scene));
     std::string error;
     if (!app.open(&error)) {
       std::fprintf(stderr, "softbody: %s\n", error.c_str());
-      code = 1;
+      windowFailed = true;
     } else {
       code = app.run();
     }
   }
   glfwTerminate();
+  if (windowFailed) {
+    // A display without usable OpenGL 3.3: still run the scene, as with no display at all.
+    std::printf("softbody: no usable display: running headless (%d steps of %s, no window)\n",
+                options.frames > 0 ? options.frames : 300, options.scenePath.c_str());
+    try {
+      Scene again = loadScene(options.scenePath);
+      return runViewerHeadless(again, options);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "softbody: %s\n", e.what());
+      return 1;
+    }
+  }
   return code;
 #endif
 }

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Clicking the panel's Pause checkbox with a real mouse click (xdotool, inside Xvfb) stops the
-# simulation: frames keep coming, simulated time and body centres stay unchanged.
+# simulation: frames keep coming, simulated time and body centres stay unchanged. Then the
+# space key resumes it.
 # usage: pause_test.sh SOFTBODY CHECK WORKDIR
 SOFTBODY=$1 CHECK=$2 WORK=$3
 source "$(dirname "$0")/common.sh"
@@ -10,8 +11,9 @@ if [ "${INNER:-0}" != 1 ]; then
   INNER=1 exec xvfb-run -a -s "$XVFB_SERVER_ARGS" bash "$0" "$@" </dev/null
 fi
 
-"$SOFTBODY" ${SCENE_ARGS[@]+"${SCENE_ARGS[@]}"} --frames 200 --stats "$WORK/live.json" --stats-every 5 >"$WORK/viewer.log" 2>&1 &
+"$SOFTBODY" ${SCENE_ARGS[@]+"${SCENE_ARGS[@]}"} --frames 100000 --stats "$WORK/live.json" --stats-every 5 >"$WORK/viewer.log" 2>&1 &
 VIEWER_PID=$!
+trap '[ -n "${VIEWER_PID:-}" ] && kill "$VIEWER_PID" 2>/dev/null || true' EXIT
 snapshot "$WORK/live.json" 10 "$WORK/running0.json"
 snapshot "$WORK/live.json" 30 "$WORK/running1.json"
 t0=$("$CHECK" get "$WORK/running0.json" /simTime)
@@ -28,6 +30,20 @@ now=$("$CHECK" get "$WORK/live.json" /frame)
 snapshot "$WORK/live.json" $((now + 15)) "$WORK/paused0.json"
 now=$("$CHECK" get "$WORK/paused0.json" /frame)
 snapshot "$WORK/live.json" $((now + 40)) "$WORK/paused1.json"
-finish_viewer
 "$CHECK" still "$WORK/paused0.json" "$WORK/paused1.json" || fail "the bodies moved after clicking Pause"
-echo "PASS: clicking Pause stopped the simulation"
+
+# The space key resumes (keyboard shortcut; the key is held briefly like a person would).
+xdotool mousemove 900 400
+xdotool keydown space
+sleep 0.1
+xdotool keyup space
+now=$("$CHECK" get "$WORK/live.json" /frame)
+snapshot "$WORK/live.json" $((now + 20)) "$WORK/resumed.json"
+kill "$VIEWER_PID"
+wait "$VIEWER_PID" 2>/dev/null || true
+VIEWER_PID=
+[ "$("$CHECK" get "$WORK/resumed.json" /paused)" = false ] || fail "space did not resume"
+t2=$("$CHECK" get "$WORK/paused1.json" /simTime)
+t3=$("$CHECK" get "$WORK/resumed.json" /simTime)
+[ "$t2" != "$t3" ] || fail "the simulation did not run again after space"
+echo "PASS: clicking Pause stopped the simulation; space resumed it ($t2 s -> $t3 s)"
