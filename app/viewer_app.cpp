@@ -374,10 +374,13 @@ void ViewerApp::renderFrame() {
   groundRenderer_->draw(viewProjection, eye, groundHeight(), cell, 5.0f * sceneSize_);
 
   meshRenderer_->begin(view, projection, eye);
+  // Closed, outward-oriented meshes: culling back faces halves llvmpipe's triangle work.
+  if (cullBackFaces_) glEnable(GL_CULL_FACE);
   for (BodyView& v : views_) {
     v.mesh->setVertices(v.vertices.data(), v.normals.data(), static_cast<std::size_t>(v.vertices.rows()));
     if (!options_.hideBodies) meshRenderer_->draw(*v.mesh, v.colour);
   }
+  glDisable(GL_CULL_FACE);
   drawColliders(*debugDraw_);
   debugDraw_->flush(viewProjection, 1.0f, true);
   drawOverlays(*debugDraw_);

@@ -145,6 +145,7 @@ class ViewerApp {
   bool showClusters_ = false;
   bool showGoals_ = false;
   bool showColliders_ = true;
+  bool cullBackFaces_ = true;
 
   // Mouse state.
   double cursorX_ = 0, cursorY_ = 0;

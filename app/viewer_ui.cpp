@@ -108,6 +108,10 @@ void ViewerApp::drawUi() {
     ImGui::SameLine();
     ImGui::Checkbox("colliders", &showColliders_);
     tooltip("Show static colliders other than the ground as wireframes.");
+    ImGui::SameLine();
+    ImGui::Checkbox("cull", &cullBackFaces_);
+    tooltip("Skip the back faces of the body meshes (faster). Turn off to see the inside of "
+            "inverted or torn meshes.");
   }
   if (ImGui::CollapsingHeader("Timings", ImGuiTreeNodeFlags_DefaultOpen)) drawTimingPanel();
   if (ImGui::CollapsingHeader("Help")) {

@@ -26,10 +26,6 @@ void main() {
   vec2 cell = floor(vWorld.xz / uCell);
   float checker = mod(cell.x + cell.y, 2.0);
   vec3 colour = mix(vec3(0.36, 0.38, 0.42), vec3(0.46, 0.48, 0.52), checker);
-  // Thin darker lines on the cell borders help to read depth.
-  vec2 f = abs(fract(vWorld.xz / uCell) - 0.5);
-  float border = step(0.48, max(f.x, f.y));
-  colour *= 1.0 - 0.12 * border;
   float fade = clamp(length(vWorld.xz - uEye.xz) / (0.9 * uExtent), 0.0, 1.0);
   vec3 background = vec3(0.16, 0.17, 0.20);
   fragColour = vec4(mix(colour, background, fade * fade), 1.0);
@@ -63,13 +59,15 @@ void GroundRenderer::draw(const glm::mat4& viewProjection, const glm::vec3& eye,
   shader_.set("uCell", cellSize);
   shader_.set("uEye", eye);
   shader_.set("uExtent", extent);
-  // Polygon offset pushes the ground back so contact shadows of debug lines do not z-fight.
-  glEnable(GL_POLYGON_OFFSET_FILL);
-  glPolygonOffset(1.0f, 1.0f);
+  // Drawn first and behind everything (the ground is a collider: nothing goes below it), so no
+  // depth test or depth writes: on llvmpipe that saves a depth read and write per pixel.
+  glDisable(GL_DEPTH_TEST);
+  glDepthMask(GL_FALSE);
   glBindVertexArray(vao_);
   glDrawArrays(GL_TRIANGLES, 0, 6);
   glBindVertexArray(0);
-  glDisable(GL_POLYGON_OFFSET_FILL);
+  glDepthMask(GL_TRUE);
+  glEnable(GL_DEPTH_TEST);
 }
 
 }  // namespace sb::render

@@ -1,5 +1,6 @@
 // A large checkerboard ground plane (y = height), drawn as one quad whose fragment shader
-// computes the checker and fades it out with distance.
+// computes the checker and fades it out with distance. Draw it first: it does not touch the
+// depth buffer, so everything drawn afterwards appears in front of it.
 #pragma once
 
 #include <glm/glm.hpp>
