@@ -118,7 +118,11 @@ bool ViewerApp::open(std::string* error) {
   io.IniFilename = nullptr;  // no imgui.ini: the layout is fixed and tests must not depend on one
   ImGui::StyleColorsDark();
   ImGui::GetStyle().WindowRounding = 0.0f;
-  ImGui::GetStyle().Colors[ImGuiCol_WindowBg].w = 1.0f;  // opaque: nothing is drawn behind it
+  // The panel's background is not drawn by ImGui (a blended full-height quad is expensive on
+  // llvmpipe): renderFrame clears the panel's rectangle to this colour instead.
+  ImVec4& panelBackground = ImGui::GetStyle().Colors[ImGuiCol_WindowBg];
+  panelColour_ = glm::vec3(panelBackground.x, panelBackground.y, panelBackground.z);
+  panelBackground.w = 0.0f;
   ImGui_ImplGlfw_InitForOpenGL(window_, true);
   ImGui_ImplOpenGL3_Init("#version 330 core");
   imguiReady_ = true;
@@ -349,10 +353,17 @@ void ViewerApp::renderFrame() {
   glViewport(0, 0, framebufferWidth_, framebufferHeight_);
   glClearColor(0.16f, 0.17f, 0.20f, 1.0f);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-  // The scene is drawn right of the panel only (the panel is opaque): fewer pixels to shade.
+  // The scene is drawn right of the panel only: fewer pixels to shade.
   const ViewRect rect = viewRect();
   const float toFramebuffer =
       static_cast<float>(framebufferWidth_) / static_cast<float>(std::max(windowWidth_, 1));
+  if (!options_.hideUi) {
+    glEnable(GL_SCISSOR_TEST);
+    glScissor(0, 0, static_cast<GLsizei>(rect.x * toFramebuffer), framebufferHeight_);
+    glClearColor(panelColour_.r, panelColour_.g, panelColour_.b, 1.0f);
+    glClear(GL_COLOR_BUFFER_BIT);
+    glDisable(GL_SCISSOR_TEST);
+  }
   glViewport(static_cast<GLint>(rect.x * toFramebuffer), 0,
              static_cast<GLsizei>(rect.width * toFramebuffer),
              static_cast<GLsizei>(rect.height * toFramebuffer));

@@ -131,6 +131,7 @@ class ViewerApp {
   std::unique_ptr<render::DebugDraw> debugDraw_;
   std::vector<BodyView> views_;
   render::OrbitCamera camera_;
+  glm::vec3 panelColour_{0.06f};  // background of the ImGui panel (cleared, not drawn by ImGui)
   float sceneSize_ = 1.0f;  // diagonal of the bodies' bounds when the scene was opened, metres
 
   // Simulation control.
