@@ -28,7 +28,12 @@ template <int N>
 Eigen::Matrix<double, N, N> symmetricPseudoInverse(const Eigen::Matrix<double, N, N>& M,
                                                    double relTol) {
   using MatN = Eigen::Matrix<double, N, N>;
-  Eigen::SelfAdjointEigenSolver<MatN> eig(0.5 * (M + M.transpose()));
+  Eigen::SelfAdjointEigenSolver<MatN> eig;
+  if constexpr (N == 3) {
+    eig.computeDirect(0.5 * (M + M.transpose()));  // closed form: much faster for 3×3
+  } else {
+    eig.compute(0.5 * (M + M.transpose()));
+  }
   const auto& lambda = eig.eigenvalues();
   const double lmax = lambda.cwiseAbs().maxCoeff();
   if (!(lmax > 0.0) || !std::isfinite(lmax)) return MatN::Zero();
@@ -69,9 +74,15 @@ ClusterRestModel buildClusterRest(const int* members, int count, const float* rx
   return c;
 }
 
-ClusterShape deriveClusterShape(const ClusterRestModel& rest, const Mat3& plastic) {
+ClusterShape deriveClusterShape(const ClusterRestModel& rest, const Mat3& plastic, bool quadratic) {
   ClusterShape s;
   s.mono = monomialMap(plastic);
+  s.monoMean = s.mono * rest.sumWmono0 / rest.mass;
+  const Mat3 Aqq = plastic * rest.moments0.topLeftCorner<3, 3>() * plastic.transpose();
+  // Float rest positions carry ~1e-7 relative noise: directions weaker than that are flat.
+  s.AqqInv = symmetricPseudoInverse<3>(Aqq, 1e-6);
+  if (!quadratic) return s;
+  s.hasQuadratic = true;
   const double invS = 1.0 / rest.scale;
   // B maps y⁰ = [q⁰, mono(q⁰)] to [q/s, mono(q)/s²].
   Mat9 B = Mat9::Zero();
@@ -79,15 +90,11 @@ ClusterShape deriveClusterShape(const ClusterRestModel& rest, const Mat3& plasti
   B.bottomRightCorner<6, 6>() = s.mono * (invS * invS);
   const Vec9 sumY = (Vec9() << rest.sumWq0, rest.sumWmono0).finished();
   const Vec9 sumBy = B * sumY;
-  s.monoMean = s.mono * rest.sumWmono0 / rest.mass;
   Vec9 shift = Vec9::Zero();  // subtract the mean of the normalised monomials
   shift.tail<6>() = sumBy.tail<6>() / rest.mass;
   // Σ w (B y − shift)(B y − shift)ᵀ, expanded.
   const Mat9 second = B * rest.moments0 * B.transpose() - sumBy * shift.transpose() -
                       shift * sumBy.transpose() + rest.mass * shift * shift.transpose();
-  const Mat3 Aqq = plastic * rest.moments0.topLeftCorner<3, 3>() * plastic.transpose();
-  // Float rest positions carry ~1e-7 relative noise: directions weaker than that are flat.
-  s.AqqInv = symmetricPseudoInverse<3>(Aqq, 1e-6);
   s.AqqTildeInv = symmetricPseudoInverse<9>(second, 1e-7);
   return s;
 }

@@ -30,8 +30,10 @@ struct ClusterRestModel {
   double scale = 1.0;               // RMS radius of q⁰ (m, > 0): normalises quadratic terms
 };
 
-// Depends on Sᵖ; rebuilt when Sᵖ changes.
+// Depends on Sᵖ; rebuilt when Sᵖ changes. The quadratic part (a 9×9 eigen-decomposition) is
+// only derived when a body is in quadratic mode.
 struct ClusterShape {
+  bool hasQuadratic = false;    // AqqTildeInv and monoMean are valid
   Mat3 AqqInv = Mat3::Zero();   // (Σ w q qᵀ)⁺, pseudo-inverse: flat/collinear clusters are fine
   Mat9 AqqTildeInv = Mat9::Zero();  // (Σ w q̃ q̃ᵀ)⁺ with q̃ = [q/s, (mono(q) − mean)/s²]
   Vec6 monoMean = Vec6::Zero();  // mass-weighted mean of mono(q) (m²)
@@ -54,8 +56,8 @@ Mat6 monomialMap(const Mat3& S);
 ClusterRestModel buildClusterRest(const int* members, int count, const float* rx, const float* ry,
                                   const float* rz, const float* w);
 
-// Derives the Sᵖ-dependent data.
-ClusterShape deriveClusterShape(const ClusterRestModel& rest, const Mat3& plastic);
+// Derives the Sᵖ-dependent data; the quadratic part only when `quadratic`.
+ClusterShape deriveClusterShape(const ClusterRestModel& rest, const Mat3& plastic, bool quadratic);
 
 // Moore–Penrose pseudo-inverse of a symmetric positive semi-definite matrix, dropping
 // eigenvalues below relTol·λmax (so singular moment matrices never divide by zero).

@@ -59,8 +59,8 @@ Eigen::Quaterniond closestRotation(const Mat3& A, const Eigen::Quaterniond& warm
   const double scale = A.norm();
   if (!(scale > 0.0) || !std::isfinite(scale)) return warm;
   const Mat3 An = A / scale;
-  Eigen::Quaterniond q = extractRotationIterative(An, warm, 24);
-  if (isClosestRotation(q.matrix(), An, 1e-6)) return q;
+  Eigen::Quaterniond q = extractRotationIterative(An, warm, 64);
+  if (isClosestRotation(q.matrix(), An, 1e-9)) return q;
   // The iteration stalled at a saddle (e.g. an inverted configuration seen from a warm start
   // on the other side) or converged too slowly: take the SVD answer.
   q = Eigen::Quaterniond(closestRotationSvd(An));

@@ -11,6 +11,8 @@ namespace {
 
 constexpr int kLanes = 8;    // independent float partial sums per accumulator (SIMD width)
 constexpr int kBlock = 512;  // members summed in float before the block total goes to double
+// Linear mode never enlarges a fit by more than 1/kMinVolumeScale to restore its volume.
+constexpr double kMinVolumeScale = 0.5;
 
 template <bool kGather, bool kQuadratic>
 ClusterMoments accumulate(const ParticleColumns& p, const int* members, int begin, int end,
@@ -125,7 +127,10 @@ GoalTransform goalTransform(const ClusterFit& fit, const ClusterMoments& m,
       if (!(det > 1e-12 * size * size * size)) {
         A = R;
       } else if (params.preserveVolume) {
-        A /= std::cbrt(det);
+        // Restoring the volume scales the fit isotropically by 1/∛det. For a cluster crushed
+        // almost flat that factor is unbounded and would fling the goals (and all the energy)
+        // far away, so the restoring scale is capped: volume comes back over several steps.
+        A /= std::max(std::cbrt(det), kMinVolumeScale);
       }
       Tlin = beta * A + (1.0 - beta) * R;
       break;

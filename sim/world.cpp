@@ -9,7 +9,7 @@
 
 #include "sim/cluster_layout.h"
 #include "sim/cluster_rest.h"
-#include "sim/parallel.h"
+#include "sim/parallel_for.h"
 #include "sim/plasticity.h"
 #include "sim/shape_matching.h"
 
@@ -181,7 +181,7 @@ void resetClusterState(const BodyModel& m, BodyState& s) {
   s.ref.resize(nc);
   s.goal.assign(nc, GoalTransform{});
   for (size_t c = 0; c < nc; ++c) {
-    s.shape[c] = deriveClusterShape(m.clusterRest[c], Mat3::Identity());
+    s.shape[c] = deriveClusterShape(m.clusterRest[c], Mat3::Identity(), false);
     Vec3 centre = Vec3::Zero();
     double mass = 0;
     for (int k = m.memberStart[c]; k < m.memberStart[c + 1]; ++k) {
@@ -255,19 +255,20 @@ void World::Data::applyExternal(double h) {
   }
   for (const auto& [id, drag] : drags) {
     BodySlot& b = slot(drag.body);
-    Vec3 point = Vec3::Zero();
+    Vec3 point = Vec3::Zero(), pointVelocity = Vec3::Zero();
     double sumW2 = 0;
     for (size_t k = 0; k < drag.particles.size(); ++k) {
       point += drag.weights[k] * b.state.x.row(drag.particles[k]).transpose().cast<double>();
+      pointVelocity += drag.weights[k] * b.state.v.row(drag.particles[k]).transpose().cast<double>();
       sumW2 += drag.weights[k] * drag.weights[k];
     }
-    // Minimum-norm particle moves that bring the point onto the target, as a velocity change
-    // that closes `stiffness` of the gap over this sub-step.
-    const Vec3 gap = drag.target - point;
-    for (size_t k = 0; k < drag.particles.size(); ++k) {
-      const Vec3 dv = (drag.stiffness * drag.weights[k] / (sumW2 * h)) * gap;
-      b.state.v.row(drag.particles[k]) += dv.transpose().cast<float>();
-    }
+    // Give the dragged point the velocity that closes `stiffness` of the gap over this sub-step,
+    // by the minimum-norm change of the particles' velocities (design.md §6). Replacing the
+    // point's velocity, rather than adding to it, keeps the pull from oscillating.
+    const Vec3 wanted = (drag.stiffness / h) * (drag.target - point);
+    const Vec3 change = (wanted - pointVelocity) / sumW2;
+    for (size_t k = 0; k < drag.particles.size(); ++k)
+      b.state.v.row(drag.particles[k]) += (drag.weights[k] * change).transpose().cast<float>();
   }
 }
 
@@ -321,6 +322,9 @@ void World::Data::computeGoals(double h, std::vector<char>& bad, StepProfile& pr
     const int taskCount = m.taskStart[c + 1] - m.taskStart[c];
     for (int t = 0; t < taskCount; ++t) sum += partial[size_t(gc.firstTask + t)];
     const Eigen::Vector3f ref = s.ref[c];
+    const bool quadratic = b.params.mode == Mode::Quadratic;
+    if (quadratic && !s.shape[c].hasQuadratic)  // switched to quadratic since the last derive
+      s.shape[c] = deriveClusterShape(m.clusterRest[c], s.plastic[c], true);
     ClusterFit fit = fitCluster(sum, ref, m.clusterRest[c], s.shape[c], s.plastic[c], s.rotation[c]);
     if (!fit.finite) {
       clusterBad[size_t(i)] = 1;
@@ -332,7 +336,7 @@ void World::Data::computeGoals(double h, std::vector<char>& bad, StepProfile& pr
       const Mat3 stretch = R.transpose() * fit.linear;
       if (updatePlasticDeformation(0.5 * (stretch + stretch.transpose()), h, b.params.plasticity,
                                    s.plastic[c])) {
-        s.shape[c] = deriveClusterShape(m.clusterRest[c], s.plastic[c]);
+        s.shape[c] = deriveClusterShape(m.clusterRest[c], s.plastic[c], quadratic);
         fit = fitCluster(sum, ref, m.clusterRest[c], s.shape[c], s.plastic[c], fit.rotation);
       }
       plasticSeconds[size_t(i)] = secondsSince(tp);

@@ -1,0 +1,123 @@
+// Scene files: the shipped scenes load, errors name file/field/reason, saving round-trips.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <filesystem>
+#include <fstream>
+
+#include "sim/cage/mesh_io.h"
+#include "sim/scene.h"
+
+namespace sb {
+namespace {
+
+namespace fs = std::filesystem;
+const std::string kAssets = SOFTBODY_ASSET_DIR;
+
+std::string body(const std::string& extra) {
+  return R"({"bodies": [{"name": "b", "mesh": ")" + kAssets + R"(/meshes/suzanne_cage.obj")" + extra + "}]}";
+}
+
+void expectSceneError(const std::string& json, const std::string& needle) {
+  try {
+    parseScene(json, "test.json", "");
+    FAIL() << "no error, expected " << needle;
+  } catch (const SceneError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.rfind("test.json: ", 0), 0u) << what;  // names the file first
+    EXPECT_NE(what.find(needle), std::string::npos) << what;
+  }
+}
+
+TEST(Scene, DefaultSceneLoadsWithBoundRenderMeshes) {
+  const Scene scene = loadScene(defaultScenePath());
+  ASSERT_GE(scene.bodies.size(), 3u);
+  for (size_t i = 0; i < scene.bodies.size(); ++i) {
+    const SceneBody& b = scene.bodies[i];
+    ASSERT_TRUE(b.render) << i;
+    PointsRowMajor v;
+    scene.renderVertices(int(i), v);
+    // At the start the particles are the placed cage, so by linear precision of mean value
+    // coordinates the render vertices are the placed render mesh.
+    const cage::TriangleMesh mesh = cage::readMesh(kAssets + "/scenes/" + b.render->path);
+    ASSERT_EQ(v.rows(), int(mesh.vertices.size()));
+    const Vec3 r = b.rotationDegrees * (M_PI / 180.0);
+    const Mat3 R = (Eigen::AngleAxisd(r.z(), Vec3::UnitZ()) * Eigen::AngleAxisd(r.y(), Vec3::UnitY()) *
+                    Eigen::AngleAxisd(r.x(), Vec3::UnitX())).toRotationMatrix();
+    double worst = 0;
+    for (size_t k = 0; k < mesh.vertices.size(); ++k) {
+      const Vec3 expected = R * (b.scale * mesh.vertices[k]) + b.translation;
+      worst = std::max(worst, (v.row(int(k)).transpose().cast<double>() - expected).norm());
+    }
+    EXPECT_LT(worst, 1e-4) << i;
+    EXPECT_FALSE(scene.renderTriangles(int(i)).empty());
+  }
+}
+
+TEST(Scene, ErrorsNameFileFieldAndReason) {
+  expectSceneError("{\n \"bodies\": [\n  {,}\n]}", "line 3");
+  expectSceneError("{}", "bodies: is required");
+  expectSceneError(R"({"bodies": [], "wrld": {}})", "wrld: unknown field");
+  expectSceneError(body(R"(, "alpha": 3)"), "bodies[0].alpha: must be in [0, 1], got 3");
+  expectSceneError(body(R"(, "mode": "jelly")"), "bodies[0].mode: must be rigid, linear or quadratic");
+  expectSceneError(body(R"(, "translation": [1, 2])"), "bodies[0].translation: must be an array of 3 numbers");
+  expectSceneError(body(R"(, "clusters": {"kind": "grid", "cellSize": -1})"), "bodies[0].clusters.cellSize");
+  expectSceneError(body(R"(, "clusters": {"kind": "explicit", "clusters": [[0, 1, 999]]})"),
+                   "bodies[0]: clusters.clusters[0]: particle index out of range");
+  expectSceneError(body(R"(, "plasticity": {"yeild": 1})"), "bodies[0].plasticity.yeild: unknown field");
+  expectSceneError(R"({"world": {"substeps": 0}, "bodies": []})", "world.substeps: must be in [1, 1000]");
+  expectSceneError(R"({"colliders": [{"type": "cone"}], "bodies": []})", "colliders[0].type");
+  expectSceneError(R"({"bodies": [{"mesh": "/no/such/mesh.obj"}]})", "bodies[0].mesh: /no/such/mesh.obj");
+  // A render mesh needs a valid closed cage; a mesh with no faces cannot be one.
+  const fs::path dir = fs::temp_directory_path() / "softbody_scene_test";
+  fs::create_directories(dir);
+  {
+    std::ofstream(dir / "points.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n";
+  }
+  expectSceneError(R"({"bodies": [{"mesh": ")" + (dir / "points.obj").string() +
+                       R"(", "renderMesh": ")" + kAssets + R"(/meshes/suzanne.obj"}]})",
+                   "bodies[0].mesh: cannot bind the render mesh");
+}
+
+TEST(Scene, SaveRoundTripsParametersAtomically) {
+  Scene scene = loadScene(defaultScenePath());
+  const BodyHandle h = scene.bodies[0].handle;
+  BodyParams p = scene.world.params(h);
+  p.mode = Mode::Linear;
+  p.alpha = 0.123;
+  p.plasticity = {0.2, 0.7, 0.3};
+  scene.world.setParams(h, p);
+  WorldSettings s = scene.world.settings();
+  s.substeps = 7;
+  scene.world.setSettings(s);
+  const fs::path dir = fs::temp_directory_path() / "softbody_save_test" / "sub";
+  fs::create_directories(dir);
+  const std::string path = (dir / "saved.json").string();
+  saveScene(scene, path);
+  EXPECT_FALSE(fs::exists(path + ".tmp"));
+  const Scene back = loadScene(path);  // mesh paths were rebased to the new folder
+  ASSERT_EQ(back.bodies.size(), scene.bodies.size());
+  const BodyParams q = back.world.params(back.bodies[0].handle);
+  EXPECT_EQ(q.mode, Mode::Linear);
+  EXPECT_DOUBLE_EQ(q.alpha, 0.123);
+  EXPECT_DOUBLE_EQ(q.plasticity.creep, 0.7);
+  EXPECT_EQ(back.world.settings().substeps, 7);
+  EXPECT_EQ(back.world.clusterCount(back.bodies[1].handle), scene.world.clusterCount(scene.bodies[1].handle));
+  // A failed save leaves the existing file as it was.
+  const std::string before = [&] { std::ifstream in(path); return std::string(std::istreambuf_iterator<char>(in), {}); }();
+  EXPECT_THROW(saveScene(scene, (dir / "no_such_dir" / "x.json").string()), SceneError);
+  const std::string after = [&] { std::ifstream in(path); return std::string(std::istreambuf_iterator<char>(in), {}); }();
+  EXPECT_EQ(before, after);
+}
+
+TEST(Scene, MissingFileIsAClearError) {
+  try {
+    loadScene("/definitely/not/here.json");
+    FAIL();
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("/definitely/not/here.json: cannot open"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace sb

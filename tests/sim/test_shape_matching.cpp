@@ -1,0 +1,195 @@
+// Shape matching: the goals of each mode reproduce the deformations they claim to, computed
+// independently here from the closed forms.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "sim/cluster_layout.h"
+#include "sim/cluster_rest.h"
+#include "test_util.h"
+
+namespace sb {
+namespace {
+
+using test::jitteredGrid;
+using test::noGravity;
+using test::toMatrix;
+
+// Goals of the body for positions x (the Goals phase of one step, read back).
+Eigen::MatrixX3d goalsFor(const BodyDef& def, const Eigen::MatrixX3d& x) {
+  World world(noGravity(0.01));
+  const BodyHandle b = world.addBody(def);
+  world.setState(b, x, Eigen::MatrixX3d::Zero(x.rows(), 3));
+  world.step();
+  return world.goals(b);
+}
+
+Eigen::MatrixX3d applyAffine(const std::vector<Vec3>& rest, const Mat3& A, const Vec3& t) {
+  Eigen::MatrixX3d x(static_cast<int>(rest.size()), 3);
+  for (size_t i = 0; i < rest.size(); ++i) x.row(int(i)) = (A * rest[i] + t).transpose();
+  return x;
+}
+
+BodyDef gridBody(Mode mode, bool clustered) {
+  BodyDef def;
+  def.positions = jitteredGrid(5, 1.0, Vec3(0.3, -0.2, 0.1), 17);
+  def.params.mode = mode;
+  def.params.beta = 1.0;
+  def.params.preserveVolume = false;
+  if (clustered) {
+    def.clusters.kind = ClusterDef::Kind::Grid;
+    def.clusters.cellSize = 0.5;
+    def.clusters.overlap = 0.3;
+  }
+  return def;
+}
+
+double relError(const Eigen::MatrixX3d& a, const Eigen::MatrixX3d& b) {
+  return (a - b).rowwise().norm().maxCoeff() / (b.colwise().maxCoeff() - b.colwise().minCoeff()).norm();
+}
+
+TEST(ShapeMatching, LinearWithBetaZeroEqualsRigid) {
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> u(-0.2, 0.2);
+  for (bool clustered : {false, true}) {
+    BodyDef rigid = gridBody(Mode::Rigid, clustered);
+    BodyDef linear = gridBody(Mode::Linear, clustered);
+    linear.params.beta = 0.0;
+    Eigen::MatrixX3d x = toMatrix(rigid.positions);
+    for (int i = 0; i < x.rows(); ++i) x.row(i) += Eigen::RowVector3d(u(rng), u(rng), u(rng));
+    EXPECT_LT(relError(goalsFor(linear, x), goalsFor(rigid, x)), 1e-6) << clustered;
+  }
+}
+
+TEST(ShapeMatching, LinearReproducesAnyAffineMap) {
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<double> u(-0.6, 0.6);
+  for (bool clustered : {false, true})
+    for (int k = 0; k < 5; ++k) {
+      Mat3 A = Mat3::Identity();
+      for (int i = 0; i < 9; ++i) A(i / 3, i % 3) += u(rng);
+      if (A.determinant() < 0.1) continue;
+      const Vec3 t(u(rng), u(rng), u(rng));
+      const BodyDef def = gridBody(Mode::Linear, clustered);
+      const Eigen::MatrixX3d x = applyAffine(def.positions, A, t);
+      EXPECT_LT(relError(goalsFor(def, x), x), 2e-6) << "clustered " << clustered << " k " << k;
+    }
+}
+
+TEST(ShapeMatching, VolumePreservingLinearNormalisesDeterminant) {
+  std::mt19937 rng(3);
+  BodyDef def = gridBody(Mode::Linear, false);
+  def.params.preserveVolume = true;
+  // det A = 1: reproduced exactly.
+  const Mat3 shear = (Mat3() << 1, 0.4, 0, 0, 1, 0.2, 0, 0, 1).finished();
+  const Mat3 R = test::randomRotation(rng);
+  Eigen::MatrixX3d x = applyAffine(def.positions, R * shear, Vec3(1, 2, 3));
+  EXPECT_LT(relError(goalsFor(def, x), x), 2e-6);
+  // det A = 8: goals follow A / ∛8 about the centre of mass.
+  const Mat3 A = 2.0 * R * shear;
+  x = applyAffine(def.positions, A, Vec3::Zero());
+  Eigen::MatrixX3d expected = applyAffine(def.positions, A / 2.0, Vec3::Zero());
+  const Eigen::RowVector3d shift = x.colwise().mean() - expected.colwise().mean();  // equal masses
+  expected.rowwise() += shift;
+  EXPECT_LT(relError(goalsFor(def, x), expected), 2e-6);
+}
+
+TEST(ShapeMatching, QuadraticReproducesAnyQuadraticMap) {
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> u(-0.4, 0.4);
+  for (bool clustered : {false, true})
+    for (int k = 0; k < 4; ++k) {
+      Mat3 A = Mat3::Identity();
+      for (int i = 0; i < 9; ++i) A(i / 3, i % 3) += 0.5 * u(rng);
+      Eigen::Matrix<double, 3, 6> Q;
+      for (int i = 0; i < 18; ++i) Q(i / 6, i % 6) = u(rng);
+      const Vec3 t(u(rng), u(rng), u(rng));
+      const BodyDef def = gridBody(Mode::Quadratic, clustered);
+      Eigen::MatrixX3d x(static_cast<int>(def.positions.size()), 3);
+      for (size_t i = 0; i < def.positions.size(); ++i)
+        x.row(int(i)) = (A * def.positions[i] + Q * monomials<double>(def.positions[i]) + t).transpose();
+      EXPECT_LT(relError(goalsFor(def, x), x), 2e-5) << "clustered " << clustered << " k " << k;
+      // Linear mode cannot: the bend is really there.
+      EXPECT_GT(relError(goalsFor(gridBody(Mode::Linear, clustered), x), x), 1e-3);
+    }
+}
+
+TEST(ShapeMatching, FlatAndCollinearBodiesGiveFiniteRigidGoals) {
+  std::mt19937 rng(5);
+  std::vector<Vec3> flat, line;
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 6; ++j) flat.push_back(Vec3(0.2 * i, 0.2 * j, 0.0));
+  for (int i = 0; i < 8; ++i) line.push_back(Vec3(0.1 * i, 0.0, 0.0));
+  for (const auto& shape : {flat, line})
+    for (Mode mode : {Mode::Rigid, Mode::Linear, Mode::Quadratic}) {
+      BodyDef def;
+      def.positions = shape;
+      def.params.mode = mode;
+      def.params.beta = 1.0;
+      const Mat3 R = test::randomRotation(rng);
+      const Eigen::MatrixX3d x = applyAffine(shape, R, Vec3(1, 0, 0));
+      const Eigen::MatrixX3d g = goalsFor(def, x);
+      ASSERT_TRUE(g.allFinite());
+      EXPECT_LT(relError(g, x), 1e-5) << modeName(mode);  // a rotated rest shape is its own goal
+    }
+}
+
+TEST(ClusterRest, MonomialMapTransformsQuadraticTerms) {
+  std::mt19937 rng(6);
+  std::normal_distribution<double> g;
+  for (int k = 0; k < 20; ++k) {
+    Mat3 S;
+    for (int i = 0; i < 9; ++i) S(i / 3, i % 3) = g(rng);
+    const Vec3 q(g(rng), g(rng), g(rng));
+    EXPECT_LT((monomialMap(S) * monomials<double>(q) - monomials<double>(Vec3(S * q))).norm(), 1e-12 * (1 + (S * q).squaredNorm()));
+  }
+}
+
+TEST(ClusterRest, PseudoInverseOfSingularMatrixIsFinite) {
+  const Mat3 flat = Vec3(1.0, 2.0, 0.0).asDiagonal();
+  const Mat3 inv = symmetricPseudoInverse<3>(flat, 1e-9);
+  EXPECT_TRUE(inv.allFinite());
+  EXPECT_LT((inv - Mat3(Vec3(1.0, 0.5, 0.0).asDiagonal())).norm(), 1e-12);
+  EXPECT_EQ(symmetricPseudoInverse<3>(Mat3::Zero(), 1e-9), Mat3::Zero());
+}
+
+TEST(ClusterLayout, GridCoversEveryParticleAndOverlapSharesThem) {
+  const std::vector<Vec3> rest = jitteredGrid(9, 2.0, Vec3::Zero(), 3);
+  ClusterDef def;
+  def.kind = ClusterDef::Kind::Grid;
+  def.cellSize = 0.5;
+  def.overlap = 0.0;
+  std::vector<int> count(rest.size(), 0);
+  for (const auto& c : buildClusterMembers(def, rest))
+    for (int p : c) ++count[size_t(p)];
+  for (int c : count) EXPECT_EQ(c, 1);  // disjoint cells partition the body
+  def.overlap = 0.5;  // one whole cell on every side: interior particles are in 27 clusters
+  std::fill(count.begin(), count.end(), 0);
+  for (const auto& c : buildClusterMembers(def, rest))
+    for (int p : c) ++count[size_t(p)];
+  EXPECT_EQ(*std::max_element(count.begin(), count.end()), 27);
+  EXPECT_GE(*std::min_element(count.begin(), count.end()), 1);
+}
+
+TEST(ClusterLayout, RejectsBadDefinitions) {
+  const std::vector<Vec3> rest = jitteredGrid(3, 1.0, Vec3::Zero(), 3);
+  ClusterDef def;
+  def.kind = ClusterDef::Kind::Grid;
+  def.cellSize = -1;
+  EXPECT_THROW(buildClusterMembers(def, rest), std::invalid_argument);
+  def.cellSize = 1e-9;
+  EXPECT_THROW(buildClusterMembers(def, rest), std::invalid_argument);
+  def.kind = ClusterDef::Kind::Explicit;
+  def.clusters = {{0, 1, 2}, {3, 99}};
+  try {
+    buildClusterMembers(def, rest);
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("clusters.clusters[1]"), std::string::npos) << e.what();
+  }
+  def.clusters = {{0, 1, 2}};
+  EXPECT_THROW(buildClusterMembers(def, rest), std::invalid_argument);  // particles left out
+}
+
+}  // namespace
+}  // namespace sb
