@@ -272,10 +272,53 @@ void Embedding::deform(ConstPointsRef cagePositions, PointsRowMajor& out) const 
     throw std::invalid_argument("Embedding::deform: got " + std::to_string(cagePositions.rows()) +
                                 " cage positions, the embedding has " + std::to_string(cols_));
   out.resize(rows_, 3);
+  // Memory-bound: stream W once, row by row, against the cage coordinates as three contiguous
+  // float arrays (a few KB, in L1). Rows are independent: static OpenMP split.
+  const int m = cols_;
+  std::vector<float> cx(static_cast<std::size_t>(m)), cy(static_cast<std::size_t>(m)), cz(static_cast<std::size_t>(m));
+  for (int j = 0; j < m; ++j) {
+    cx[j] = cagePositions(j, 0);
+    cy[j] = cagePositions(j, 1);
+    cz[j] = cagePositions(j, 2);
+  }
+  const float* X = cx.data();
+  const float* Y = cy.data();
+  const float* Z = cz.data();
+  float* o = out.data();
+  const int n = rows_;
   if (sparse_) {
-    out.noalias() = sparseF_ * cagePositions;
+    // One 16-byte load per nonzero: cage positions as (x, y, z, 0) quadruples.
+    typedef float v4sf __attribute__((vector_size(16)));
+    std::vector<v4sf> c4(static_cast<std::size_t>(m));
+    for (int j = 0; j < m; ++j) c4[j] = v4sf{X[j], Y[j], Z[j], 0.0f};
+    const v4sf* C = c4.data();
+    const int* outer = sparseF_.outerIndexPtr();
+    const int* inner = sparseF_.innerIndexPtr();
+    const float* val = sparseF_.valuePtr();
+#pragma omp parallel for schedule(static) if (n > 2000)
+    for (int i = 0; i < n; ++i) {
+      v4sf acc = {0.0f, 0.0f, 0.0f, 0.0f};
+      for (int k = outer[i]; k < outer[i + 1]; ++k) acc += val[k] * C[inner[k]];
+      o[3 * static_cast<std::size_t>(i)] = acc[0];
+      o[3 * static_cast<std::size_t>(i) + 1] = acc[1];
+      o[3 * static_cast<std::size_t>(i) + 2] = acc[2];
+    }
   } else {
-    out.noalias() = denseF_ * cagePositions;
+    const float* W = denseF_.data();
+#pragma omp parallel for schedule(static) if (n > 2000)
+    for (int i = 0; i < n; ++i) {
+      const float* w = W + static_cast<std::size_t>(i) * static_cast<std::size_t>(m);
+      float sx = 0.0f, sy = 0.0f, sz = 0.0f;
+#pragma omp simd reduction(+ : sx, sy, sz)
+      for (int j = 0; j < m; ++j) {
+        sx += w[j] * X[j];
+        sy += w[j] * Y[j];
+        sz += w[j] * Z[j];
+      }
+      o[3 * static_cast<std::size_t>(i)] = sx;
+      o[3 * static_cast<std::size_t>(i) + 1] = sy;
+      o[3 * static_cast<std::size_t>(i) + 2] = sz;
+    }
   }
 }
 
