@@ -8,6 +8,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <limits>
@@ -125,6 +126,10 @@ BindStats statsFromList(const std::vector<double>& v) {
 constexpr std::size_t kStatsCount = 15;
 
 void writeFileAtomic(const std::string& path, const std::string& data) {
+  // Create the directory (e.g. a fresh cache directory); failures surface when opening.
+  std::error_code ec;
+  const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+  if (!parent.empty()) std::filesystem::create_directories(parent, ec);
   const std::string tmp = path + ".tmp." + std::to_string(::getpid());
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);

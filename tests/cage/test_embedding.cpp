@@ -337,7 +337,13 @@ TEST_F(CacheTest, ReuseRebindOnChangeAndCorruption) {
 TEST_F(CacheTest, UnwritableCacheDirectoryOnlyWarns) {
   const TriangleMesh cage = testing::makeBox(1, 1, 1);
   BindOptions o;
-  o.cacheDir = (dir_ / "does" / "not" / "exist").string();
+  // A missing directory is created...
+  o.cacheDir = (dir_ / "new" / "dir").string();
+  EXPECT_FALSE(bindMeanValue({Vec3(0.5, 0.5, 0.5)}, cage, o).stats().fromCache);
+  EXPECT_TRUE(bindMeanValue({Vec3(0.5, 0.5, 0.5)}, cage, o).stats().fromCache);
+  // ...but one below a regular file cannot be: warn and carry on.
+  { std::ofstream(dir_ / "file") << "x"; }
+  o.cacheDir = (dir_ / "file" / "sub").string();
   int warnings = 0;
   o.warning = [&](const std::string&) { ++warnings; };
   const Embedding e = bindMeanValue({Vec3(0.5, 0.5, 0.5)}, cage, o);
