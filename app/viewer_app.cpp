@@ -446,9 +446,6 @@ int ViewerApp::run() {
   start_ = Clock::now();
   Clock::time_point nextFrame = start_;
   Clock::time_point lastFrameStart = start_;
-  const bool capped = options_.fpsCap > 0.0;
-  const auto period = std::chrono::duration_cast<Clock::duration>(
-      std::chrono::duration<double>(capped ? 1.0 / options_.fpsCap : 0.0));
   const long screenshotFrame = options_.frames > 0 ? options_.frames - 1 : 119;
 
   while (!glfwWindowShouldClose(window_)) {
@@ -515,7 +512,10 @@ int ViewerApp::run() {
       writeStats(options_.statsPath);
     if (options_.frames > 0 && frame_ >= options_.frames) glfwSetWindowShouldClose(window_, GLFW_TRUE);
 
-    if (capped) {
+    // The cap may change in the panel at any time.
+    if (options_.fpsCap > 0.0) {
+      const auto period = std::chrono::duration_cast<Clock::duration>(
+          std::chrono::duration<double>(1.0 / options_.fpsCap));
       nextFrame += period;
       const Clock::time_point now = Clock::now();
       if (nextFrame < now - period) nextFrame = now;  // fell behind: do not try to catch up

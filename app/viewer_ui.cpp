@@ -284,6 +284,11 @@ void ViewerApp::drawTimingPanel() {
   tooltip("deform: render vertices = W x particles, plus smooth normals.\n"
           "render: panel, drawing, buffer swap.");
   ImGui::Text("frame %.2f ms", timings_.lastFrame);
+  int cap = static_cast<int>(options_.fpsCap + 0.5);
+  if (ImGui::SliderInt("fps cap", &cap, 0, 240, cap == 0 ? "uncapped" : "%d fps"))
+    options_.fpsCap = cap;
+  tooltip("Frames per second at most (0 = as fast as possible). One simulation step runs per "
+          "frame. Vsync does not limit the rate under Xvfb, this cap does.");
   const int n = FrameTimings::kHistory;
   const ImVec2 plotSize(kPanelWidth - 140.0f, 36.0f);
   ImGui::PlotLines("simulation", timings_.simHistory.data(), n, timings_.cursor, nullptr, 0.0f,
