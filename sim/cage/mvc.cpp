@@ -183,7 +183,11 @@ void MeanValueCage::triangleAlone(const Vec3& p, const Tri& t, double out[3]) co
 
 // The three passes below are plain loops over arrays, compiled for AVX2 and for the baseline
 // (picked at load time); without FMA contraction both give bit-identical results.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 #define SB_CAGE_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define SB_CAGE_CLONES
+#endif
 
 namespace {
 
