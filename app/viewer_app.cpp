@@ -178,7 +178,20 @@ void ViewerApp::frameCamera() {
     lo = glm::min(lo, v.boundsMin);
     hi = glm::max(hi, v.boundsMax);
   }
-  if (views_.empty() || lo.x > hi.x) {
+  // Static colliders other than planes belong to the scene too.
+  for (const Collider& c : scene_.world.colliders()) {
+    Vec3 half = Vec3::Zero();
+    const Vec3 centre = c.centre;
+    switch (c.shape) {
+      case Collider::Shape::Plane: continue;
+      case Collider::Shape::Box: half = c.rotation.cwiseAbs() * c.halfExtents; break;
+      case Collider::Shape::Sphere: half = Vec3::Constant(c.radius); break;
+      case Collider::Shape::Capsule: half = c.axis.cwiseAbs() + Vec3::Constant(c.radius); break;
+    }
+    lo = glm::min(lo, toGlm(centre - half));
+    hi = glm::max(hi, toGlm(centre + half));
+  }
+  if (lo.x > hi.x) {
     lo = glm::vec3(-1.0f);
     hi = glm::vec3(1.0f);
   }
@@ -392,7 +405,7 @@ void ViewerApp::renderFrame() {
     if (!options_.hideBodies) meshRenderer_->draw(*v.mesh, v.colour);
   }
   glDisable(GL_CULL_FACE);
-  drawColliders(*debugDraw_);
+  if (showColliders_) drawColliders(*debugDraw_);
   debugDraw_->flush(viewProjection, 1.0f, true);
   drawOverlays(*debugDraw_);
   debugDraw_->flush(viewProjection, 6.0f, !(showParticles_ || showGoals_));
