@@ -53,7 +53,10 @@ void ViewerApp::writeStats(const std::string& path) const {
                  {"right", vec(camera_.right())},
                  {"up", vec(camera_.up())},
                  {"forward", vec(camera_.forward())}};
-  j["drag"] = {{"active", drag_.active}, {"body", drag_.body}};
+  j["drag"] = {{"active", drag_.active},
+               {"body", drag_.body},
+               {"nearestParticle", drag_.nearestParticle},
+               {"particles", drag_.particles.size()}};
 
   const float w = static_cast<float>(std::max(windowWidth_, 1));
   const float h = static_cast<float>(std::max(windowHeight_, 1));
