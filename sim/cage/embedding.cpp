@@ -152,15 +152,25 @@ void writeFileAtomic(const std::string& path, const std::string& data) {
 // Returns the L1 norm of the change.
 double pruneRow(std::vector<std::pair<int, double>>& row, const double* w, int m, const std::vector<Vec3>& q,
                 double threshold) {
-  double maxAbs = 0.0;
-  for (int j = 0; j < m; ++j) maxAbs = std::max(maxAbs, std::abs(w[j]));
-  const double cut = threshold * maxAbs;
-  row.clear();
-  std::vector<std::pair<double, int>> droppedList;  // (|w|, j)
+  // Drop the smallest |w_j| while their total stays within threshold · Σ|w| (ties: by index).
+  std::vector<std::pair<double, int>> order;
+  order.reserve(static_cast<std::size_t>(m));
+  double total = 0.0;
   for (int j = 0; j < m; ++j) {
-    if (std::abs(w[j]) >= cut && w[j] != 0.0) row.emplace_back(j, w[j]);
-    else if (w[j] != 0.0) droppedList.emplace_back(std::abs(w[j]), j);
+    order.emplace_back(std::abs(w[j]), j);
+    total += std::abs(w[j]);
   }
+  std::sort(order.begin(), order.end());
+  const double budget = threshold * total;
+  double droppedMass = 0.0;
+  std::size_t nDrop = 0;
+  while (nDrop < order.size() && droppedMass + order[nDrop].first <= budget) droppedMass += order[nDrop++].first;
+  row.clear();
+  std::vector<std::pair<double, int>> droppedList(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(nDrop));
+  for (std::size_t k = nDrop; k < order.size(); ++k) row.emplace_back(order[k].second, w[order[k].second]);
+  std::sort(row.begin(), row.end());
+  // Exact zeros carry nothing: drop them without counting.
+  row.erase(std::remove_if(row.begin(), row.end(), [](const auto& e) { return e.second == 0.0; }), row.end());
   if (droppedList.empty()) return 0.0;
   auto column = [&](int j) { return Eigen::Vector4d(1.0, q[j].x(), q[j].y(), q[j].z()); };
   // The kept vertices must span 3D (well conditioned) for the correction to exist: if they do
@@ -302,8 +312,18 @@ void Embedding::deform(ConstPointsRef cagePositions, PointsRowMajor& out) const 
     const float* val = sparseF_.valuePtr();
 #pragma omp parallel for schedule(static) if (n > 2000)
     for (int i = 0; i < n; ++i) {
-      v4sf acc = {0.0f, 0.0f, 0.0f, 0.0f};
-      for (int k = outer[i]; k < outer[i + 1]; ++k) acc += val[k] * C[inner[k]];
+      // Four independent accumulators hide the add latency.
+      v4sf a0 = {0.0f, 0.0f, 0.0f, 0.0f}, a1 = a0, a2 = a0, a3 = a0;
+      int k = outer[i];
+      const int end = outer[i + 1];
+      for (; k + 4 <= end; k += 4) {
+        a0 += val[k] * C[inner[k]];
+        a1 += val[k + 1] * C[inner[k + 1]];
+        a2 += val[k + 2] * C[inner[k + 2]];
+        a3 += val[k + 3] * C[inner[k + 3]];
+      }
+      for (; k < end; ++k) a0 += val[k] * C[inner[k]];
+      const v4sf acc = (a0 + a1) + (a2 + a3);
       o[3 * static_cast<std::size_t>(i)] = acc[0];
       o[3 * static_cast<std::size_t>(i) + 1] = acc[1];
       o[3 * static_cast<std::size_t>(i) + 2] = acc[2];

@@ -44,10 +44,11 @@ struct BindOptions {
   // sparse, unless pruning keeps more than half the entries (then dense, unpruned).
   WeightStorage storage = WeightStorage::Auto;
   int denseMaxCageVertices = 256;
-  // Sparse pruning: in each row drop |w_j| < pruneThreshold · max_k |w_k|, then add to the kept
-  // weights the minimum-norm correction (weighted by |w_j|) that restores both Σw = 1 and linear
-  // precision Σ w_j v_j = x exactly (see README.md).
-  double pruneThreshold = 1e-3;
+  // Sparse pruning: in each row drop the smallest |w_j| as long as their sum stays within
+  // pruneThreshold · Σ_k |w_k|, then add to the kept weights the minimum-norm correction
+  // (weighted by |w_j|) that restores both Σw = 1 and linear precision Σ w_j v_j = x exactly
+  // (see README.md).
+  double pruneThreshold = 0.01;
   bool keepDoublePrecision = true;  // keep the double weights (rowWeights, deformDouble); float always
   std::string cacheDir;             // empty = no cache
   // Called from the calling thread after each block of points: (points done, total).

@@ -115,7 +115,7 @@ DeformSetup& deformSetup() {
     BindOptions o;
     o.storage = WeightStorage::Dense;
     s->dense = bindMeanValue(s->points, s->cage, o);
-    for (double thr : {1e-3, 1e-2, 3e-2}) {
+    for (double thr : {1e-2, 3e-2, 1e-1}) {
       BindOptions so;
       so.storage = WeightStorage::Sparse;
       so.pruneThreshold = thr;
