@@ -50,6 +50,10 @@ void ViewerApp::writeStats(const std::string& path) const {
   for (const auto& [name, r] : widgetRects_) widgets[name] = {r[0], r[1], r[2], r[3]};
   j["widgets"] = widgets;
   j["camera"] = {{"eye", vec(camera_.eye())},
+                 {"target", vec(camera_.target)},
+                 {"distance", camera_.distance},
+                 {"yaw", camera_.yaw},
+                 {"pitch", camera_.pitch},
                  {"right", vec(camera_.right())},
                  {"up", vec(camera_.up())},
                  {"forward", vec(camera_.forward())}};
