@@ -560,6 +560,24 @@ Embedding bindMeanValue(const std::vector<Vec3>& points, const TriangleMesh& cag
   bool sparse = options.storage == WeightStorage::Sparse ||
                 (options.storage == WeightStorage::Auto && m > options.denseMaxCageVertices);
   const int threads = options.threads > 0 ? options.threads : omp_get_max_threads();
+  if (sparse && options.storage == WeightStorage::Auto && n > 0) {
+    // Auto: decide on a sample of up to 64 evenly spaced points whether pruning keeps at most
+    // half of the entries; otherwise store dense and unpruned.
+    const int samples = std::min(n, 64);
+    MeanValueCage::Scratch scratch;
+    std::vector<double> w(static_cast<std::size_t>(m));
+    std::vector<Vec3> q(static_cast<std::size_t>(m));
+    std::vector<std::pair<int, double>> row;
+    std::int64_t kept = 0;
+    for (int k = 0; k < samples; ++k) {
+      const Vec3& x = points[static_cast<std::size_t>(static_cast<std::int64_t>(k) * n / samples)];
+      if (!prepared.weights(x, w.data(), scratch)) continue;
+      for (int j = 0; j < m; ++j) q[j] = (cage.vertices[j] - x) / L;
+      pruneRow(row, w.data(), m, q, options.pruneThreshold);
+      kept += static_cast<std::int64_t>(row.size());
+    }
+    sparse = 2 * kept <= static_cast<std::int64_t>(samples) * m;
+  }
 
   Embedding::DenseD dense;
   std::vector<std::vector<std::pair<int, double>>> rows;
@@ -619,9 +637,6 @@ Embedding bindMeanValue(const std::vector<Vec3>& points, const TriangleMesh& cag
   std::int64_t totalNnz = 0;
   if (sparse) {
     for (const auto& r : rows) totalNnz += static_cast<std::int64_t>(r.size());
-    if (options.storage == WeightStorage::Auto && 2 * totalNnz > static_cast<std::int64_t>(n) * m) {
-      sparse = false;  // pruning does not pay: recompute dense rows from the unpruned weights
-    }
   }
   if (sparse) {
     std::vector<Eigen::Triplet<double>> trips;
@@ -634,25 +649,6 @@ Embedding bindMeanValue(const std::vector<Vec3>& points, const TriangleMesh& cag
     rows.shrink_to_fit();
     e = Embedding::fromSparse(std::move(W), options.keepDoublePrecision);
   } else {
-    if (dense.rows() != n) {
-      // Auto fell back to dense after pruning: bind again unpruned (rare: tiny meshes).
-      BindOptions dopt = options;
-      dopt.storage = WeightStorage::Dense;
-      dopt.cacheDir.clear();
-      dopt.progress = nullptr;
-      Embedding d = bindMeanValue(points, cage, dopt);
-      e = std::move(d);
-      const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      e.stats().seconds = secs;
-      if (!cachePath.empty()) {
-        try {
-          e.save(cachePath, key);
-        } catch (const std::exception& ex) {
-          warn(std::string("could not write bind cache: ") + ex.what());
-        }
-      }
-      return e;
-    }
     e = Embedding::fromDense(std::move(dense), options.keepDoublePrecision);
   }
 

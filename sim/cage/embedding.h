@@ -41,7 +41,8 @@ enum class WeightStorage { Auto, Dense, Sparse };
 struct BindOptions {
   int threads = 0;  // OpenMP threads for the bind (0 = OpenMP default)
   // Auto: dense when the cage has at most denseMaxCageVertices vertices; otherwise pruned and
-  // sparse, unless pruning keeps more than half the entries (then dense, unpruned).
+  // sparse, unless pruning keeps more than half the entries on a sample of 64 points (then
+  // dense, unpruned).
   WeightStorage storage = WeightStorage::Auto;
   int denseMaxCageVertices = 256;
   // Sparse pruning: in each row drop the smallest |w_j| as long as their sum stays within

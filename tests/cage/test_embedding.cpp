@@ -166,6 +166,12 @@ TEST(Bind, AutoStorageRule) {
   EXPECT_TRUE(b.isSparse());
   EXPECT_LT(b.stats().maxSumError, 1e-12);
   EXPECT_LT(b.stats().maxLinearError, 1e-12);
+  EXPECT_LT(2 * b.nonZeros(), static_cast<std::int64_t>(pts.size()) * 866);
+  // When pruning would keep more than half of the entries: dense, unpruned.
+  o.pruneThreshold = 1e-4;
+  const Embedding c = bindMeanValue(pts, box, o);
+  EXPECT_FALSE(c.isSparse());
+  EXPECT_EQ(c.stats().maxPrunedL1, 0.0);
 }
 
 TEST(Bind, InvalidCageBindsNothing) {
