@@ -504,6 +504,10 @@ int ViewerApp::run() {
       renderFrame();
       if (!options_.hideUi) ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
       if (!options_.screenshot.empty() && frame_ == screenshotFrame) takeScreenshot(options_.screenshot);
+      if (!screenshotRequest_.empty()) {
+        takeScreenshot(screenshotRequest_);
+        screenshotRequest_.clear();
+      }
       glfwSwapBuffers(window_);
     }
     renderMs += millisecondsSince(renderStart);

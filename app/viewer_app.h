@@ -171,6 +171,7 @@ class ViewerApp {
   long eventCount_ = 0;
   std::string errorMessage_, statusMessage_;
   std::string scenePathInput_, savePathInput_, screenshotPathInput_;
+  std::string screenshotRequest_;  // path of a screenshot to take after this frame is drawn
 
   FrameTimings timings_;
   // Window-pixel rectangles (x0, y0, x1, y1) of named panel controls in the last frame, written

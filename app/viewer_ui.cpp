@@ -58,8 +58,9 @@ void ViewerApp::drawUi() {
   if (ImGui::Button("Reset")) resetRequested_ = true;
   tooltip("Put every body back to its start state; clears plastic deformation and drags (key: R).");
   ImGui::SameLine();
-  if (ImGui::Button("Screenshot")) takeScreenshot(screenshotPathInput_);
-  tooltip("Write the current frame (with this panel) as a PNG to the path set under Scene.");
+  // Taken after this frame is drawn (the back buffer holds nothing useful yet).
+  if (ImGui::Button("Screenshot")) screenshotRequest_ = screenshotPathInput_;
+  tooltip("Write the current frame (with this panel) as a PNG to the path set under Scene file.");
 
   ImGui::Text("t = %.2f s   frame %ld   %.0f fps", scene_.world.time(), frame_,
               ImGui::GetIO().Framerate);
