@@ -348,7 +348,8 @@ bool MeanValueCage::weights(const Vec3& x, double* w, Scratch& sc, MvcInfo* info
         // h · g(x) with g smooth there (it vanishes in the plane); the closed form is 0/0.
         // Evaluate g at heights ±δ, δ = kPlaneBand·ρ, where the closed form is accurate,
         // and interpolate g to the height h (error O(δ³/ρ³) relative).
-        const double delta = kPlaneBand * rho;
+        // δ is kept above the rounding level of the coordinates (x within ~1e-9 of the cage).
+        const double delta = std::max(kPlaneBand * rho, 1e-12 * (diagonal_ + x.cwiseAbs().maxCoeff()));
         const Vec3 pp = x + (h - delta) * t.normal;  // height (v0 - p)·n = +δ
         const Vec3 pm = x + (h + delta) * t.normal;  // height -δ
         const double hp = t.normal.dot(p0 - pp), hm = t.normal.dot(p0 - pm);
@@ -359,6 +360,9 @@ bool MeanValueCage::weights(const Vec3& x, double* w, Scratch& sc, MvcInfo* info
           const double gp = wp[k] / hp, gm = wm[k] / hm;
           const double g = 0.5 * (gp + gm) + (h - 0.5 * (hp + hm)) * (gp - gm) / (hp - hm);
           wt[k] = h * g;
+          // Unresolvable heights (cannot happen with the δ floor): the contribution vanishes
+          // in the plane, so 0 is the limit.
+          if (!(hp > 0.0 && hm < 0.0 && std::isfinite(wt[k]))) wt[k] = 0.0;
         }
       }
       // else: close to the plane but over (or near) the face: the closed form is accurate.

@@ -437,6 +437,43 @@ TEST(Mvc, NearDegenerateTrianglesGiveNoNaN) {
   }
 }
 
+// Points 1e-6 … 1e-16 (relative) from cage vertices, edges and faces, along the face normal
+// and in the face plane: always finite, partition of unity and linear precision.
+TEST(Mvc, NearCageFuzzStaysFiniteAndAccurate) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  std::normal_distribution<double> N(0.0, 1.0);
+  for (const auto& c : generatedCages()) {
+    const MeanValueCage mc(c.cage);
+    MeanValueCage::Scratch s;
+    std::vector<double> w(c.cage.vertices.size());
+    const double L = mc.diagonal();
+    double worst = 0.0;
+    for (int it = 0; it < 1500; ++it) {
+      const auto& t = c.cage.triangles[rng() % c.cage.triangles.size()];
+      const Vec3 a = c.cage.vertices[t[0]], b = c.cage.vertices[t[1]], d = c.cage.vertices[t[2]];
+      const Vec3 n = (b - a).cross(d - a).normalized();
+      double r1 = U(rng), r2 = U(rng);
+      if (r1 + r2 > 1.0) {
+        r1 = 1.0 - r1;
+        r2 = 1.0 - r2;
+      }
+      const Vec3 base = it % 3 == 0 ? a : it % 3 == 1 ? Vec3(a + r1 * (b - a)) : Vec3(a + r1 * (b - a) + r2 * (d - a));
+      const double dist = std::pow(10.0, -6.0 - static_cast<double>(rng() % 11)) * L;
+      Vec3 dir = Vec3(N(rng), N(rng), N(rng));
+      const int mode = static_cast<int>(rng() % 3);
+      if (mode == 0) dir = n;
+      else if (mode == 1) dir = -n;
+      else dir -= dir.dot(n) * n;  // in the face plane
+      const Vec3 x = base + dist * dir.normalized();
+      ASSERT_TRUE(mc.weights(x, w.data(), s)) << c.name << " " << x.transpose();
+      const auto [sumErr, linErr] = errors(c.cage, w, x);
+      worst = std::max({worst, sumErr, linErr});
+    }
+    EXPECT_LT(worst, 1e-10) << c.name;
+  }
+}
+
 TEST(Mvc, RealMeshesInsideTheirCages) {
   for (const auto& [meshName, cageName] : {std::pair<std::string, std::string>{"bunny.obj", "bunny_cage.obj"},
                                            {"suzanne.obj", "suzanne_cage.obj"}}) {
