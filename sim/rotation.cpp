@@ -5,25 +5,6 @@
 
 namespace sb {
 
-Eigen::Quaterniond extractRotationIterative(const Mat3& A, Eigen::Quaterniond q,
-                                            int maxIterations) {
-  for (int it = 0; it < maxIterations; ++it) {
-    const Mat3 R = q.matrix();
-    // ω is a damped Newton step toward alignment of R's columns with A's columns.
-    const Vec3 torque =
-        R.col(0).cross(A.col(0)) + R.col(1).cross(A.col(1)) + R.col(2).cross(A.col(2));
-    const double alignment =
-        std::abs(R.col(0).dot(A.col(0)) + R.col(1).dot(A.col(1)) + R.col(2).dot(A.col(2)));
-    // A is normalised by the caller (‖A‖_F = 1), so this floor is relative, not absolute.
-    const Vec3 omega = torque / (alignment + 1e-9);
-    const double angle = omega.norm();
-    if (!(angle > 1e-13)) break;  // converged (or NaN: stop, the caller verifies)
-    q = Eigen::Quaterniond(Eigen::AngleAxisd(angle, omega / angle)) * q;
-    q.normalize();
-  }
-  return q;
-}
-
 Mat3 closestRotationSvd(const Mat3& A) {
   Eigen::JacobiSVD<Mat3> svd(A, Eigen::ComputeFullU | Eigen::ComputeFullV);
   const Mat3 U = svd.matrixU();
@@ -55,14 +36,78 @@ bool isClosestRotation(const Mat3& R, const Mat3& A, double relativeTolerance) {
   return true;
 }
 
+namespace {
+
+// Applies the rotation vector ω (axis·angle, world frame) to q. Small steps, the common case
+// near convergence, use the second-order update and skip sin/cos.
+Eigen::Quaterniond rotateBy(const Vec3& omega, const Eigen::Quaterniond& q) {
+  const double angle = omega.norm();
+  Eigen::Quaterniond dq;
+  if (angle < 1e-3) {
+    dq = Eigen::Quaterniond(1.0 - angle * angle / 8.0, 0.5 * omega.x(), 0.5 * omega.y(), 0.5 * omega.z());
+  } else {
+    dq = Eigen::Quaterniond(Eigen::AngleAxisd(angle, omega / angle));
+  }
+  Eigen::Quaterniond out = dq * q;
+  out.normalize();
+  return out;
+}
+
+// Solves H·x = b for symmetric H by Cholesky; false when H is not positive definite (with a
+// relative margin), i.e. when R is not in the basin of the maximum.
+bool solvePositiveDefinite(const Mat3& H, const Vec3& b, double margin, Vec3* x) {
+  const double l00s = H(0, 0) - margin;
+  if (!(l00s > 0.0)) return false;
+  const double l00 = std::sqrt(H(0, 0));
+  const double l10 = H(1, 0) / l00, l20 = H(2, 0) / l00;
+  const double l11s = H(1, 1) - l10 * l10;
+  if (!(l11s > margin)) return false;
+  const double l11 = std::sqrt(l11s);
+  const double l21 = (H(2, 1) - l20 * l10) / l11;
+  const double l22s = H(2, 2) - l20 * l20 - l21 * l21;
+  if (!(l22s > margin)) return false;
+  const double l22 = std::sqrt(l22s);
+  const double y0 = b[0] / l00, y1 = (b[1] - l10 * y0) / l11, y2 = (b[2] - l20 * y0 - l21 * y1) / l22;
+  const double x2 = y2 / l22, x1 = (y1 - l21 * x2) / l11, x0 = (y0 - l10 * x1 - l20 * x2) / l00;
+  *x = Vec3(x0, x1, x2);
+  return true;
+}
+
+}  // namespace
+
 Eigen::Quaterniond closestRotation(const Mat3& A, const Eigen::Quaterniond& warm) {
   const double scale = A.norm();
   if (!(scale > 0.0) || !std::isfinite(scale)) return warm;
   const Mat3 An = A / scale;
-  Eigen::Quaterniond q = extractRotationIterative(An, warm, 64);
+  // Newton's method on f(R) = tr(RᵀA) over rotations, from the warm start. With B = A·Rᵀ the
+  // gradient (world frame) is τ = axial(B − Bᵀ) and the Hessian is H = tr(B_s)·I − B_s. Müller
+  // et al. (2016) take H ≈ tr(B)·I, which converges linearly (slowly for thin clusters); the
+  // exact H converges quadratically, and H being positive definite at the end is exactly the
+  // condition that R is the global maximum rather than a saddle.
+  Eigen::Quaterniond q = warm;
+  for (int it = 0; it < 12; ++it) {
+    const Mat3 R = q.matrix();
+    const Mat3 B = An * R.transpose();
+    const Vec3 tau(B(2, 1) - B(1, 2), B(0, 2) - B(2, 0), B(1, 0) - B(0, 1));
+    const Mat3 Bs = 0.5 * (B + B.transpose());
+    const Mat3 H = Bs.trace() * Mat3::Identity() - Bs;
+    Vec3 omega;
+    if (solvePositiveDefinite(H, tau, 1e-9, &omega)) {
+      // Converged: the step is below round-off, and H > 0 proves this is the maximum.
+      if (omega.squaredNorm() < 1e-24) return q;
+      // Newton steps are only trusted locally; longer ones are clipped.
+      const double len = omega.norm();
+      if (len > 0.5) omega *= 0.5 / len;
+    } else {
+      // Saddle region: a gradient step (Müller's) moves toward the maximum's basin.
+      omega = tau / (std::abs(B.trace()) + 1e-9);
+      if (!(omega.squaredNorm() > 1e-24)) break;  // stuck exactly on a saddle
+    }
+    q = rotateBy(omega, q);
+  }
   if (isClosestRotation(q.matrix(), An, 1e-9)) return q;
-  // The iteration stalled at a saddle (e.g. an inverted configuration seen from a warm start
-  // on the other side) or converged too slowly: take the SVD answer.
+  // Not converged (rank-deficient A has a non-unique maximum with singular H) or stuck on a
+  // saddle: the sign-corrected SVD answer.
   q = Eigen::Quaterniond(closestRotationSvd(An));
   q.normalize();
   return q;

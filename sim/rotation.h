@@ -8,16 +8,14 @@
 
 namespace sb {
 
-// Robust closest rotation, warm-started. Runs the iterative extraction of Müller, Bender,
-// Chentanez and Macklin (2016) from `warm`, verifies that the result is the global maximiser
-// (RᵀA symmetric and tr(S)·I − S positive semi-definite), and falls back to a sign-corrected SVD
-// when it is not. Degenerate A (planar, collinear, rank one, zero) still yields a proper rotation;
-// where the maximiser is not unique the one nearest the warm start is kept where possible.
-// A that is zero or not finite returns `warm` unchanged. Scale-invariant.
+// Robust closest rotation, warm-started: Newton's method on the rotation group from `warm` (the
+// exact-Hessian form of the iteration of Müller, Bender, Chentanez and Macklin 2016; typically one
+// or two steps per simulation step), which also proves the result is the global maximiser
+// (RᵀA symmetric and tr(S)·I − S positive definite). When it cannot (saddle, rank-deficient A) the
+// result is verified and otherwise replaced by the sign-corrected SVD. Degenerate A (planar,
+// collinear, rank one) still yields a proper rotation; A that is zero or not finite returns
+// `warm` unchanged. Scale-invariant.
 Eigen::Quaterniond closestRotation(const Mat3& A, const Eigen::Quaterniond& warm);
-
-// Müller et al. 2016 iterations only (no verification): the fast path, exposed for tests.
-Eigen::Quaterniond extractRotationIterative(const Mat3& A, Eigen::Quaterniond q, int maxIterations);
 
 // Sign-corrected SVD: R = U·diag(1, 1, det(UVᵀ))·Vᵀ. The reference solution.
 Mat3 closestRotationSvd(const Mat3& A);

@@ -12,7 +12,9 @@ namespace {
 constexpr int kLanes = 8;    // independent float partial sums per accumulator (SIMD width)
 constexpr int kBlock = 512;  // members summed in float before the block total goes to double
 // Linear mode never enlarges a fit by more than 1/kMinVolumeScale to restore its volume.
-constexpr double kMinVolumeScale = 0.5;
+constexpr double kMinVolumeScale = 0.8;
+// ‖A − R‖_F of a linear fit is capped here: stretches up to about ×3 along an axis.
+constexpr double kMaxFitDeparture = 2.0;
 
 template <bool kGather, bool kQuadratic>
 ClusterMoments accumulate(const ParticleColumns& p, const int* members, int begin, int end,
@@ -76,9 +78,33 @@ ClusterMoments accumulate(const ParticleColumns& p, const int* members, int begi
 
 }  // namespace
 
+// Small clusters (a tetrahedron, a handful of particles): straight double sums, no lane
+// bookkeeping, which for a few members costs more than the sums themselves.
+ClusterMoments accumulateSmall(const ParticleColumns& p, const int* members, int begin, int end,
+                               const Eigen::Vector3f& ref, const Eigen::Vector3f& rc, bool quadratic) {
+  Eigen::Vector3f wdSum = Eigen::Vector3f::Zero();
+  Eigen::Matrix3f wdq = Eigen::Matrix3f::Zero();
+  Eigen::Matrix<float, 3, 6> wdm = Eigen::Matrix<float, 3, 6>::Zero();
+  for (int k = begin; k < end; ++k) {
+    const int i = members ? members[k] : k;
+    const float w = p.w[i];
+    const Eigen::Vector3f wd = w * Eigen::Vector3f(p.x[0][i] - ref.x(), p.x[1][i] - ref.y(), p.x[2][i] - ref.z());
+    const Eigen::Vector3f q(p.r[0][i] - rc.x(), p.r[1][i] - rc.y(), p.r[2][i] - rc.z());
+    wdSum += wd;
+    wdq.noalias() += wd * q.transpose();
+    if (quadratic) wdm.noalias() += wd * monomials<float>(q).transpose();
+  }
+  ClusterMoments out;
+  out.wd = wdSum.cast<double>();
+  out.wdq = wdq.cast<double>();
+  if (quadratic) out.wdm = wdm.cast<double>();
+  return out;
+}
+
 ClusterMoments accumulateMoments(const ParticleColumns& p, const int* members, int begin, int end,
                                  const Eigen::Vector3f& ref, const Eigen::Vector3f& restCentre,
                                  bool quadratic) {
+  if (end - begin < 2 * kLanes) return accumulateSmall(p, members, begin, end, ref, restCentre, quadratic);
   if (members) {
     return quadratic ? accumulate<true, true>(p, members, begin, end, ref, restCentre)
                      : accumulate<true, false>(p, members, begin, end, ref, restCentre);
@@ -130,8 +156,13 @@ GoalTransform goalTransform(const ClusterFit& fit, const ClusterMoments& m,
         // Restoring the volume scales the fit isotropically by 1/∛det. For a cluster crushed
         // almost flat that factor is unbounded and would fling the goals (and all the energy)
         // far away, so the restoring scale is capped: volume comes back over several steps.
-        A /= std::max(std::cbrt(det), kMinVolumeScale);
+        A /= std::clamp(std::cbrt(det), kMinVolumeScale, 1.0 / kMinVolumeScale);
       }
+      // Bound how far the fit may depart from the rotation. With volume restored, β near 1
+      // leaves directions with no restoring force (any needle of the rest volume is a fixed
+      // point), and the goals could wander to unbounded sizes, taking the energy with them.
+      const double departure = (A - R).norm();
+      if (departure > kMaxFitDeparture) A = R + (kMaxFitDeparture / departure) * (A - R);
       Tlin = beta * A + (1.0 - beta) * R;
       break;
     }
@@ -152,6 +183,12 @@ GoalTransform goalTransform(const ClusterFit& fit, const ClusterMoments& m,
   // q = Sᵖ r − s0 with s0 = Sᵖ rc, and mono(q) = mono(Sᵖ)·mono(r) + N·r + k.
   const Mat3& S = plastic;
   const Vec3 s0 = S * rest.centre.cast<double>();
+  GoalTransform g;
+  if (params.mode != Mode::Quadratic) {
+    g.L = (Tlin * S).cast<float>();
+    g.t = (fit.centre - Tlin * s0).cast<float>();
+    return g;
+  }
   static constexpr int kA[6] = {0, 1, 2, 0, 1, 2};
   static constexpr int kB[6] = {0, 1, 2, 1, 2, 0};
   Eigen::Matrix<double, 6, 3> N;
@@ -160,7 +197,6 @@ GoalTransform goalTransform(const ClusterFit& fit, const ClusterMoments& m,
     N.row(j) = -(s0[kA[j]] * S.row(kB[j]) + s0[kB[j]] * S.row(kA[j]));
     k[j] = s0[kA[j]] * s0[kB[j]];
   }
-  GoalTransform g;
   g.L = (Tlin * S + Tquad * N).cast<float>();
   g.Q = (Tquad * shape.mono).cast<float>();
   g.t = (fit.centre - Tlin * s0 + Tquad * (k - shape.monoMean)).cast<float>();

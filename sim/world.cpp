@@ -22,7 +22,9 @@ using Clock = std::chrono::steady_clock;
 
 constexpr int kMembersPerTask = 8192;    // cluster members per moment task
 constexpr int kParticlesPerBlock = 4096;  // particles per integration/collision block
-constexpr int kMinParallelTasks = 4;
+// Below this many particles (or cluster members) a phase runs on one thread: fork/join would
+// cost more than it saves.
+constexpr long long kMinParallelWork = 16384;
 
 double secondsSince(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
@@ -213,6 +215,27 @@ struct ParticleBlock {
   int begin, end;
 };
 
+// A moment task of some body, in the world's fixed order.
+struct GlobalTask {
+  int slot;
+  int task;
+};
+
+// A cluster of some body and where its tasks start in the world's task list.
+struct GlobalCluster {
+  int slot;
+  int cluster;
+  int firstTask;
+};
+
+// The work lists of one step, rebuilt only when bodies or clusters change.
+struct WorkLayout {
+  std::vector<GlobalTask> tasks;
+  std::vector<GlobalCluster> clusters;
+  std::vector<ParticleBlock> blocks;
+  long long members = 0, particles = 0;
+};
+
 }  // namespace
 
 struct World::Data {
@@ -226,6 +249,12 @@ struct World::Data {
   double time = 0;
   StepProfile profile;
   std::vector<WorldEvent> events;
+  WorkLayout layout;
+  bool layoutDirty = true;
+  // Scratch reused every sub-step (no allocations in the loop).
+  std::vector<ClusterMoments> partial;
+  std::vector<double> plasticSeconds;
+  std::vector<char> clusterBad, blockBad, bad;
 
   BodySlot& slot(BodyHandle h) {
     if (h.index >= slots.size() || !slots[h.index].alive || slots[h.index].generation != h.generation)
@@ -236,10 +265,11 @@ struct World::Data {
     return BodyHandle{static_cast<std::uint32_t>(s), slots[size_t(s)].generation};
   }
 
+  void rebuildLayout();
   void substep(double h, StepProfile& prof);
   void applyExternal(double h);
-  void computeGoals(double h, std::vector<char>& bad, StepProfile& prof);
-  void integrate(double h, std::vector<char>& bad);
+  void computeGoals(double h, std::vector<char>& badBodies, StepProfile& prof);
+  void integrate(double h, std::vector<char>& badBodies);
   void damp();
   void collide();
 };
@@ -272,29 +302,14 @@ void World::Data::applyExternal(double h) {
   }
 }
 
-void World::Data::computeGoals(double h, std::vector<char>& bad, StepProfile& prof) {
+void World::Data::computeGoals(double h, std::vector<char>& badBodies, StepProfile& prof) {
   auto t0 = Clock::now();
-  // All moment tasks of the world in a fixed order.
-  struct GlobalTask {
-    int slot;
-    int task;
-  };
-  std::vector<GlobalTask> tasks;
-  struct GlobalCluster {
-    int slot;
-    int cluster;
-    int firstTask;  // index into `tasks`
-  };
-  std::vector<GlobalCluster> clusters;
-  for (int s : order) {
-    const BodyModel& m = *slots[size_t(s)].model;
-    const int base = static_cast<int>(tasks.size());
-    for (int t = 0; t < static_cast<int>(m.tasks.size()); ++t) tasks.push_back({s, t});
-    for (int c = 0; c < m.clusterCount(); ++c)
-      clusters.push_back({s, c, base + m.taskStart[size_t(c)]});
-  }
-  std::vector<ClusterMoments> partial(tasks.size());
-  parallelFor(static_cast<int>(tasks.size()), kMinParallelTasks, [&](int i) {
+  const std::vector<GlobalTask>& tasks = layout.tasks;
+  const std::vector<GlobalCluster>& clusters = layout.clusters;
+  partial.resize(tasks.size());
+  // Threads only pay off for large clusters; small worlds run serially (no fork/join cost).
+  const int minParallelTasks = layout.members >= kMinParallelWork ? 2 : INT32_MAX;
+  parallelFor(static_cast<int>(tasks.size()), minParallelTasks, [&](int i) {
     const BodySlot& b = slots[size_t(tasks[size_t(i)].slot)];
     const BodyModel& m = *b.model;
     const MomentTask& task = m.tasks[size_t(tasks[size_t(i)].task)];
@@ -310,17 +325,17 @@ void World::Data::computeGoals(double h, std::vector<char>& bad, StepProfile& pr
                             m.clusterRest[size_t(task.cluster)].centre, quadratic);
   });
   // Per cluster: sum its tasks in order, fit, plastic flow, goal transform.
-  std::vector<double> plasticSeconds(clusters.size(), 0.0);
-  std::vector<char> clusterBad(clusters.size(), 0);
-  parallelFor(static_cast<int>(clusters.size()), 64, [&](int i) {
+  plasticSeconds.assign(clusters.size(), 0.0);
+  clusterBad.assign(clusters.size(), 0);
+  parallelFor(static_cast<int>(clusters.size()), clusters.size() >= 512 ? 2 : INT32_MAX, [&](int i) {
     const GlobalCluster& gc = clusters[size_t(i)];
     BodySlot& b = slots[size_t(gc.slot)];
     const BodyModel& m = *b.model;
     BodyState& s = b.state;
     const size_t c = size_t(gc.cluster);
-    ClusterMoments sum;
     const int taskCount = m.taskStart[c + 1] - m.taskStart[c];
-    for (int t = 0; t < taskCount; ++t) sum += partial[size_t(gc.firstTask + t)];
+    ClusterMoments& sum = partial[size_t(gc.firstTask)];  // tasks of a cluster summed in order
+    for (int t = 1; t < taskCount; ++t) sum += partial[size_t(gc.firstTask + t)];
     const Eigen::Vector3f ref = s.ref[c];
     const bool quadratic = b.params.mode == Mode::Quadratic;
     if (quadratic && !s.shape[c].hasQuadratic)  // switched to quadratic since the last derive
@@ -350,7 +365,7 @@ void World::Data::computeGoals(double h, std::vector<char>& bad, StepProfile& pr
   double plasticTotal = 0;
   for (size_t i = 0; i < clusters.size(); ++i) {
     plasticTotal += plasticSeconds[i];
-    if (clusterBad[i]) bad[size_t(clusters[i].slot)] = 1;
+    if (clusterBad[i]) badBodies[size_t(clusters[i].slot)] = 1;
   }
   // Plastic time is measured inside the cluster loop (summed over threads); report it apart.
   const double total = secondsSince(t0);
@@ -447,22 +462,17 @@ bool integrateBlock(const BodyModel& m, BodyState& s, const BodyParams& params, 
 
 }  // namespace
 
-void World::Data::integrate(double h, std::vector<char>& bad) {
-  std::vector<ParticleBlock> blocks;
-  for (int s : order) {
-    const int n = slots[size_t(s)].model->particleCount();
-    for (int b = 0; b < n; b += kParticlesPerBlock)
-      blocks.push_back({s, b, std::min(n, b + kParticlesPerBlock)});
-  }
-  std::vector<char> blockBad(blocks.size(), 0);
-  parallelFor(static_cast<int>(blocks.size()), 2, [&](int i) {
+void World::Data::integrate(double h, std::vector<char>& badBodies) {
+  const std::vector<ParticleBlock>& blocks = layout.blocks;
+  blockBad.assign(blocks.size(), 0);
+  parallelFor(static_cast<int>(blocks.size()), layout.particles >= kMinParallelWork ? 2 : INT32_MAX, [&](int i) {
     const ParticleBlock& blk = blocks[size_t(i)];
     BodySlot& b = slots[size_t(blk.slot)];
     blockBad[size_t(i)] =
         integrateBlock(*b.model, b.state, b.params, settings.gravity, h, blk.begin, blk.end);
   });
   for (size_t i = 0; i < blocks.size(); ++i)
-    if (blockBad[i]) bad[size_t(blocks[i].slot)] = 1;
+    if (blockBad[i]) badBodies[size_t(blocks[i].slot)] = 1;
   // Pinned particles stay where they started.
   for (int s : order) {
     BodySlot& b = slots[size_t(s)];
@@ -511,13 +521,8 @@ void World::Data::damp() {
 
 void World::Data::collide() {
   if (colliders.empty()) return;
-  std::vector<ParticleBlock> blocks;
-  for (int s : order) {
-    const int n = slots[size_t(s)].model->particleCount();
-    for (int b = 0; b < n; b += kParticlesPerBlock)
-      blocks.push_back({s, b, std::min(n, b + kParticlesPerBlock)});
-  }
-  parallelFor(static_cast<int>(blocks.size()), 2, [&](int i) {
+  const std::vector<ParticleBlock>& blocks = layout.blocks;
+  parallelFor(static_cast<int>(blocks.size()), layout.particles >= kMinParallelWork ? 2 : INT32_MAX, [&](int i) {
     const ParticleBlock& blk = blocks[size_t(i)];
     BodyState& s = slots[size_t(blk.slot)].state;
     for (int p = blk.begin; p < blk.end; ++p) {
@@ -548,12 +553,30 @@ void World::Data::collide() {
   });
 }
 
+void World::Data::rebuildLayout() {
+  layout = WorkLayout{};
+  for (int s : order) {
+    const BodyModel& m = *slots[size_t(s)].model;
+    const int base = static_cast<int>(layout.tasks.size());
+    for (int t = 0; t < static_cast<int>(m.tasks.size()); ++t) layout.tasks.push_back({s, t});
+    for (int c = 0; c < m.clusterCount(); ++c)
+      layout.clusters.push_back({s, c, base + m.taskStart[size_t(c)]});
+    const int n = m.particleCount();
+    for (int b = 0; b < n; b += kParticlesPerBlock)
+      layout.blocks.push_back({s, b, std::min(n, b + kParticlesPerBlock)});
+    layout.members += static_cast<long long>(m.members.size());
+    layout.particles += n;
+  }
+  layoutDirty = false;
+}
+
 void World::Data::substep(double h, StepProfile& prof) {
+  if (layoutDirty) rebuildLayout();
   auto t = Clock::now();
   applyExternal(h);
   prof.external += secondsSince(t);
 
-  std::vector<char> bad(slots.size(), 0);
+  bad.assign(slots.size(), 0);
   computeGoals(h, bad, prof);
 
   t = Clock::now();
@@ -675,6 +698,7 @@ BodyHandle World::addBody(const BodyDef& def) {
   slot.generation = d_->slots[index].generation;
   d_->slots[index] = std::move(slot);
   d_->order.push_back(static_cast<int>(index));
+  d_->layoutDirty = true;
   return d_->handleOf(static_cast<int>(index));
 }
 
@@ -685,6 +709,7 @@ void World::removeBody(BodyHandle h) {
   s.model.reset();
   s.state = BodyState{};
   d_->order.erase(std::find(d_->order.begin(), d_->order.end(), int(h.index)));
+  d_->layoutDirty = true;
   for (auto it = d_->drags.begin(); it != d_->drags.end();)
     it = it->second.body == h ? d_->drags.erase(it) : std::next(it);
 }
@@ -716,6 +741,7 @@ void World::setClusters(BodyHandle h, const ClusterDef& clusters) {
   auto model = buildModel(BodyDef{}, clusters, s.model);  // throws; body unchanged then
   s.model = std::move(model);
   resetClusterState(*s.model, s.state);
+  d_->layoutDirty = true;
 }
 
 int World::clusterCount(BodyHandle h) const { return d_->slot(h).model->clusterCount(); }
