@@ -71,7 +71,7 @@ void addCommonOptions(CLI::App& app, std::string& cacheDir, int& threads, std::s
   app.add_option("--threads", threads, "OpenMP threads for the bind (0 = all)")->check(CLI::Range(0, 1024));
   app.add_option("--storage", storage, "Weight storage: auto, dense or sparse")
       ->check(CLI::IsMember({"auto", "dense", "sparse"}));
-  app.add_option("--prune", prune, "Sparse pruning threshold, relative to the row's largest |weight|")
+  app.add_option("--prune", prune, "Sparse pruning: fraction of each row's absolute weight mass that may be dropped")
       ->check(CLI::Range(0.0, 0.5));
 }
 
