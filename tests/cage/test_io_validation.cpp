@@ -211,6 +211,40 @@ TEST(CageValidation, NonManifoldVertex) {
   EXPECT_NE(e.find("components"), std::string::npos) << e;
 }
 
+// One edge-connected surface whose vertex P has two separate fans: a tube bent into a loop
+// with both ends coned to the same apex P.
+TEST(CageValidation, PinchedVertexJoiningTwoFans) {
+  const int rings = 10, k = 6;
+  TriangleMesh c;
+  for (int r = 0; r < rings; ++r) {
+    const double phi = 2 * M_PI * (r + 1) / (rings + 1);
+    const Vec3 centre(std::cos(phi), std::sin(phi), 0.0), radial = centre, up(0, 0, 1);
+    for (int j = 0; j < k; ++j) {
+      const double a = 2 * M_PI * j / k;
+      c.vertices.push_back(centre + 0.2 * (std::cos(a) * radial + std::sin(a) * up));
+    }
+  }
+  c.vertices.emplace_back(1.0, 0.0, 0.0);
+  const int P = static_cast<int>(c.vertices.size()) - 1;
+  for (int r = 0; r + 1 < rings; ++r)
+    for (int j = 0; j < k; ++j) {
+      const int a = r * k + j, b = r * k + (j + 1) % k, a2 = a + k, b2 = b + k;
+      c.triangles.push_back({a, a2, b2});
+      c.triangles.push_back({a, b2, b});
+    }
+  const std::size_t coneStart = c.triangles.size();
+  for (int j = 0; j < k; ++j) {
+    c.triangles.push_back({P, j, (j + 1) % k});
+    c.triangles.push_back({P, (rings - 1) * k + (j + 1) % k, (rings - 1) * k + j});
+  }
+  // Make the cones agree with the tube's orientation whichever way the tube came out.
+  if (validationError(c).find("inconsistent orientation") != std::string::npos)
+    for (std::size_t t = coneStart; t < c.triangles.size(); ++t) std::swap(c.triangles[t][1], c.triangles[t][2]);
+  const std::string e = validationError(c);
+  EXPECT_NE(e.find("vertex " + std::to_string(P)), std::string::npos) << e;
+  EXPECT_NE(e.find("separate fans"), std::string::npos) << e;
+}
+
 TEST(CageValidation, TwoComponents) {
   TriangleMesh a = testing::makeBox(1, 1, 1);
   const TriangleMesh b = testing::makeBox(1, 1, 1, Vec3(1, 1, 1), Vec3(3, 0, 0));
