@@ -7,6 +7,9 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 "$root/scripts/install-deps.sh"
 if [ "${SOFTBODY_SANITIZE:-0}" = 1 ]; then
   dir="$root/build/sanitize"; flags=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DSOFTBODY_SANITIZE=ON)
+  export ASAN_OPTIONS="abort_on_error=1:detect_leaks=1"
+  export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+  export LSAN_OPTIONS="suppressions=$root/scripts/lsan.supp:print_suppressions=0"
 else
   dir="$root/build/test"; flags=(-DCMAKE_BUILD_TYPE=RelWithDebInfo)
 fi

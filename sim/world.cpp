@@ -375,28 +375,20 @@ void World::Data::computeGoals(double h, std::vector<char>& badBodies, StepProfi
 
 namespace {
 
-// Integrates particles [begin, end) of one body; returns true if a non-finite value appeared.
-bool integrateBlock(const BodyModel& m, BodyState& s, const BodyParams& params, const Vec3& gravity,
-                    double h, int begin, int end) {
-  float* __restrict px = s.x.col(0).data();
-  float* __restrict py = s.x.col(1).data();
-  float* __restrict pz = s.x.col(2).data();
-  float* __restrict vx = s.v.col(0).data();
-  float* __restrict vy = s.v.col(1).data();
-  float* __restrict vz = s.v.col(2).data();
-  const float* __restrict rx = m.rest.col(0).data();
-  const float* __restrict ry = m.rest.col(1).data();
-  const float* __restrict rz = m.rest.col(2).data();
-  const float hf = float(h);
-  const float pull = float(params.alpha / h);
-  const float gvx = float(h * gravity.x()), gvy = float(h * gravity.y()), gvz = float(h * gravity.z());
-  const bool quadratic = params.mode == Mode::Quadratic;
-  int badFlag = 0;
-  // v += α(g − x)/h + h·gravity ; x += h·v
-  auto update = [&](int i, float gx, float gy, float gz) {
-    const float nvx = vx[i] + pull * (gx - px[i]) + gvx;
-    const float nvy = vy[i] + pull * (gy - py[i]) + gvy;
-    const float nvz = vz[i] + pull * (gz - pz[i]) + gvz;
+// v += α(g − x)/h + h·gravity ; x += h·v for particles [begin, end), with g from goal(i, g).
+// Plain restrict pointers and a goal functor taken by value keep this loop vectorised.
+// Returns non-zero if a non-finite value appeared.
+template <typename Goal>
+int integrateRange(float* __restrict px, float* __restrict py, float* __restrict pz,
+                   float* __restrict vx, float* __restrict vy, float* __restrict vz, int begin,
+                   int end, float hf, float pull, float gvx, float gvy, float gvz, Goal goal) {
+  int bad = 0;
+  for (int i = begin; i < end; ++i) {
+    float g[3];
+    goal(i, g);
+    const float nvx = vx[i] + pull * (g[0] - px[i]) + gvx;
+    const float nvy = vy[i] + pull * (g[1] - py[i]) + gvy;
+    const float nvz = vz[i] + pull * (g[2] - pz[i]) + gvz;
     const float nx = px[i] + hf * nvx, ny = py[i] + hf * nvy, nz = pz[i] + hf * nvz;
     vx[i] = nvx;
     vy[i] = nvy;
@@ -405,59 +397,124 @@ bool integrateBlock(const BodyModel& m, BodyState& s, const BodyParams& params, 
     py[i] = ny;
     pz[i] = nz;
     // x − x is 0 for finite x and NaN otherwise; the comparison vectorises as an integer OR.
-    badFlag |= ((nx - nx) + (ny - ny) + (nz - nz) + (nvx - nvx) + (nvy - nvy) + (nvz - nvz)) != 0.0f;
+    bad |= ((nx - nx) + (ny - ny) + (nz - nz) + (nvx - nvx) + (nvy - nvy) + (nvz - nvz)) != 0.0f;
+  }
+  return bad;
+}
+
+// The whole-body-cluster kernels: the goal is one transform, so the loop is pure streaming.
+// Written as plain functions of restrict pointers: that is what GCC vectorises.
+int integrateLinearRange(float* __restrict px, float* __restrict py, float* __restrict pz,
+                         float* __restrict vx, float* __restrict vy, float* __restrict vz,
+                         const float* __restrict rx, const float* __restrict ry,
+                         const float* __restrict rz, int begin, int end, const GoalTransform& T,
+                         float hf, float pull, float gvx, float gvy, float gvz) {
+  const float L00 = T.L(0, 0), L01 = T.L(0, 1), L02 = T.L(0, 2);
+  const float L10 = T.L(1, 0), L11 = T.L(1, 1), L12 = T.L(1, 2);
+  const float L20 = T.L(2, 0), L21 = T.L(2, 1), L22 = T.L(2, 2);
+  const float tx = T.t.x(), ty = T.t.y(), tz = T.t.z();
+  int bad = 0;
+  for (int i = begin; i < end; ++i) {
+    const float x = rx[i], y = ry[i], z = rz[i];
+    const float g0 = L00 * x + L01 * y + L02 * z + tx;
+    const float g1 = L10 * x + L11 * y + L12 * z + ty;
+    const float g2 = L20 * x + L21 * y + L22 * z + tz;
+    const float nvx = vx[i] + pull * (g0 - px[i]) + gvx;
+    const float nvy = vy[i] + pull * (g1 - py[i]) + gvy;
+    const float nvz = vz[i] + pull * (g2 - pz[i]) + gvz;
+    const float nx = px[i] + hf * nvx, ny = py[i] + hf * nvy, nz = pz[i] + hf * nvz;
+    vx[i] = nvx;
+    vy[i] = nvy;
+    vz[i] = nvz;
+    px[i] = nx;
+    py[i] = ny;
+    pz[i] = nz;
+    bad |= ((nx - nx) + (ny - ny) + (nz - nz) + (nvx - nvx) + (nvy - nvy) + (nvz - nvz)) != 0.0f;
+  }
+  return bad;
+}
+
+int integrateQuadraticRange(float* __restrict px, float* __restrict py, float* __restrict pz,
+                            float* __restrict vx, float* __restrict vy, float* __restrict vz,
+                            const float* __restrict rx, const float* __restrict ry,
+                            const float* __restrict rz, int begin, int end, const GoalTransform& T,
+                            float hf, float pull, float gvx, float gvy, float gvz) {
+  float C[3][10];  // per row: L (3), Q (6), t
+  for (int a = 0; a < 3; ++a) {
+    for (int j = 0; j < 3; ++j) C[a][j] = T.L(a, j);
+    for (int j = 0; j < 6; ++j) C[a][3 + j] = T.Q(a, j);
+    C[a][9] = T.t[a];
+  }
+  int bad = 0;
+  for (int i = begin; i < end; ++i) {
+    const float x = rx[i], y = ry[i], z = rz[i];
+    const float xx = x * x, yy = y * y, zz = z * z, xy = x * y, yz = y * z, zx = z * x;
+    float g[3];
+    for (int a = 0; a < 3; ++a)
+      g[a] = C[a][0] * x + C[a][1] * y + C[a][2] * z + C[a][3] * xx + C[a][4] * yy +
+             C[a][5] * zz + C[a][6] * xy + C[a][7] * yz + C[a][8] * zx + C[a][9];
+    const float nvx = vx[i] + pull * (g[0] - px[i]) + gvx;
+    const float nvy = vy[i] + pull * (g[1] - py[i]) + gvy;
+    const float nvz = vz[i] + pull * (g[2] - pz[i]) + gvz;
+    const float nx = px[i] + hf * nvx, ny = py[i] + hf * nvy, nz = pz[i] + hf * nvz;
+    vx[i] = nvx;
+    vy[i] = nvy;
+    vz[i] = nvz;
+    px[i] = nx;
+    py[i] = ny;
+    pz[i] = nz;
+    bad |= ((nx - nx) + (ny - ny) + (nz - nz) + (nvx - nvx) + (nvy - nvy) + (nvz - nvz)) != 0.0f;
+  }
+  return bad;
+}
+
+// Integrates particles [begin, end) of one body; returns true if a non-finite value appeared.
+bool integrateBlock(const BodyModel& m, BodyState& s, const BodyParams& params, const Vec3& gravity,
+                    double h, int begin, int end) {
+  float* px = s.x.col(0).data();
+  float* py = s.x.col(1).data();
+  float* pz = s.x.col(2).data();
+  float* vx = s.v.col(0).data();
+  float* vy = s.v.col(1).data();
+  float* vz = s.v.col(2).data();
+  const float* rx = m.rest.col(0).data();
+  const float* ry = m.rest.col(1).data();
+  const float* rz = m.rest.col(2).data();
+  const float hf = float(h);
+  const float pull = float(params.alpha / h);
+  const float gvx = float(h * gravity.x()), gvy = float(h * gravity.y()), gvz = float(h * gravity.z());
+  const bool quadratic = params.mode == Mode::Quadratic;
+  auto run = [&](auto goal) {
+    return integrateRange(px, py, pz, vx, vy, vz, begin, end, hf, pull, gvx, gvy, gvz, goal) != 0;
   };
   if (m.wholeBodyCluster) {
-    const GoalTransform& T = s.goal[0];
-    const float L00 = T.L(0, 0), L01 = T.L(0, 1), L02 = T.L(0, 2);
-    const float L10 = T.L(1, 0), L11 = T.L(1, 1), L12 = T.L(1, 2);
-    const float L20 = T.L(2, 0), L21 = T.L(2, 1), L22 = T.L(2, 2);
-    const float tx = T.t.x(), ty = T.t.y(), tz = T.t.z();
-    if (!quadratic) {
-      for (int i = begin; i < end; ++i) {
-        const float gx = L00 * rx[i] + L01 * ry[i] + L02 * rz[i] + tx;
-        const float gy = L10 * rx[i] + L11 * ry[i] + L12 * rz[i] + ty;
-        const float gz = L20 * rx[i] + L21 * ry[i] + L22 * rz[i] + tz;
-        update(i, gx, gy, gz);
-      }
-    } else {
-      float Q[3][6];
-      for (int a = 0; a < 3; ++a)
-        for (int j = 0; j < 6; ++j) Q[a][j] = T.Q(a, j);
-      for (int i = begin; i < end; ++i) {
-        const float x = rx[i], y = ry[i], z = rz[i];
-        const float mo[6] = {x * x, y * y, z * z, x * y, y * z, z * x};
-        float g[3];
-        const float L[3][3] = {{L00, L01, L02}, {L10, L11, L12}, {L20, L21, L22}};
-        const float t[3] = {tx, ty, tz};
-        for (int a = 0; a < 3; ++a) {
-          float acc = L[a][0] * x + L[a][1] * y + L[a][2] * z;
-          for (int j = 0; j < 6; ++j) acc += Q[a][j] * mo[j];
-          g[a] = acc + t[a];
-        }
-        update(i, g[0], g[1], g[2]);
-      }
-    }
-  } else {
-    for (int i = begin; i < end; ++i) {
-      // Average the goal transforms of the particle's clusters, then evaluate once.
-      Eigen::Matrix3f L = Eigen::Matrix3f::Zero();
-      Eigen::Matrix<float, 3, 6> Q = Eigen::Matrix<float, 3, 6>::Zero();
-      Eigen::Vector3f t = Eigen::Vector3f::Zero();
-      for (int k = m.particleStart[size_t(i)]; k < m.particleStart[size_t(i) + 1]; ++k) {
-        const GoalTransform& T = s.goal[size_t(m.particleClusters[size_t(k)])];
-        L += T.L;
-        t += T.t;
-        if (quadratic) Q += T.Q;
-      }
-      const Eigen::Vector3f r(rx[i], ry[i], rz[i]);
-      Eigen::Vector3f g = L * r + t;
-      if (quadratic) g += Q * monomials<float>(r);
-      g *= m.invCount[i];
-      update(i, g.x(), g.y(), g.z());
-    }
+    auto kernel = quadratic ? integrateQuadraticRange : integrateLinearRange;
+    return kernel(px, py, pz, vx, vy, vz, rx, ry, rz, begin, end, s.goal[0], hf, pull, gvx, gvy,
+                  gvz) != 0;
   }
-  return badFlag != 0;
+  const int* start = m.particleStart.data();
+  const int* clusterOf = m.particleClusters.data();
+  const float* invCount = m.invCount.data();
+  const GoalTransform* goals = s.goal.data();
+  return run([=](int i, float* g) {
+    // Average the goal transforms of the particle's clusters, then evaluate once.
+    Eigen::Matrix3f L = Eigen::Matrix3f::Zero();
+    Eigen::Matrix<float, 3, 6> Q = Eigen::Matrix<float, 3, 6>::Zero();
+    Eigen::Vector3f t = Eigen::Vector3f::Zero();
+    for (int k = start[i]; k < start[i + 1]; ++k) {
+      const GoalTransform& T = goals[clusterOf[k]];
+      L += T.L;
+      t += T.t;
+      if (quadratic) Q += T.Q;
+    }
+    const Eigen::Vector3f r(rx[i], ry[i], rz[i]);
+    Eigen::Vector3f goal = L * r + t;
+    if (quadratic) goal += Q * monomials<float>(r);
+    goal *= invCount[i];
+    g[0] = goal.x();
+    g[1] = goal.y();
+    g[2] = goal.z();
+  });
 }
 
 }  // namespace
