@@ -53,22 +53,19 @@ Eigen::Quaterniond rotateBy(const Vec3& omega, const Eigen::Quaterniond& q) {
   return out;
 }
 
-// Solves H·x = b for symmetric H by Cholesky; false when H is not positive definite (with a
-// relative margin), i.e. when R is not in the basin of the maximum.
+// Solves H·x = b for symmetric H by an LDLᵀ factorisation; false when H is not positive
+// definite (pivots above `margin`), i.e. when R is not in the basin of the maximum.
 bool solvePositiveDefinite(const Mat3& H, const Vec3& b, double margin, Vec3* x) {
-  const double l00s = H(0, 0) - margin;
-  if (!(l00s > 0.0)) return false;
-  const double l00 = std::sqrt(H(0, 0));
-  const double l10 = H(1, 0) / l00, l20 = H(2, 0) / l00;
-  const double l11s = H(1, 1) - l10 * l10;
-  if (!(l11s > margin)) return false;
-  const double l11 = std::sqrt(l11s);
-  const double l21 = (H(2, 1) - l20 * l10) / l11;
-  const double l22s = H(2, 2) - l20 * l20 - l21 * l21;
-  if (!(l22s > margin)) return false;
-  const double l22 = std::sqrt(l22s);
-  const double y0 = b[0] / l00, y1 = (b[1] - l10 * y0) / l11, y2 = (b[2] - l20 * y0 - l21 * y1) / l22;
-  const double x2 = y2 / l22, x1 = (y1 - l21 * x2) / l11, x0 = (y0 - l10 * x1 - l20 * x2) / l00;
+  const double d0 = H(0, 0);
+  if (!(d0 > margin)) return false;
+  const double l10 = H(1, 0) / d0, l20 = H(2, 0) / d0;
+  const double d1 = H(1, 1) - l10 * H(1, 0);
+  if (!(d1 > margin)) return false;
+  const double l21 = (H(2, 1) - l20 * H(1, 0)) / d1;
+  const double d2 = H(2, 2) - l20 * H(2, 0) - l21 * l21 * d1;
+  if (!(d2 > margin)) return false;
+  const double y0 = b[0], y1 = b[1] - l10 * y0, y2 = b[2] - l20 * y0 - l21 * y1;
+  const double x2 = y2 / d2, x1 = y1 / d1 - l21 * x2, x0 = y0 / d0 - l10 * x1 - l20 * x2;
   *x = Vec3(x0, x1, x2);
   return true;
 }
@@ -93,8 +90,9 @@ Eigen::Quaterniond closestRotation(const Mat3& A, const Eigen::Quaterniond& warm
     const Mat3 H = Bs.trace() * Mat3::Identity() - Bs;
     Vec3 omega;
     if (solvePositiveDefinite(H, tau, 1e-9, &omega)) {
-      // Converged: the step is below round-off, and H > 0 proves this is the maximum.
-      if (omega.squaredNorm() < 1e-24) return q;
+      // H > 0 proves this is the basin of the maximum. A step this small leaves an error of
+      // about its square (quadratic convergence): take it and stop.
+      if (omega.squaredNorm() < 1e-14) return rotateBy(omega, q);
       // Newton steps are only trusted locally; longer ones are clipped.
       const double len = omega.norm();
       if (len > 0.5) omega *= 0.5 / len;
