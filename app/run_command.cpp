@@ -43,16 +43,20 @@ int runHeadlessCommand(int argc, char** argv) {
   std::string format = "obj";
   int threads = 0;
   cli.add_option("scene", scenePath, "Scene file (JSON)")->required();
-  cli.add_option("--steps", steps, "Number of steps to run (≥ 1)")->required()->check(CLI::Range(1, 100000000));
+  cli.add_option("--steps", steps, "Number of steps to run (≥ 1)")
+      ->required()
+      ->check(CLI::Range(1, 100000000));
   cli.add_option("--dt", dt, "Seconds per step (overrides the scene's world.timeStep)")
       ->check(CLI::Range(1e-7, 10.0));
   cli.add_option("--substeps", substeps, "Sub-steps per step (overrides the scene)")
       ->check(CLI::Range(1, 1000));
   cli.add_option("--export", exportDir, "Write a frame file per exported step into this folder");
-  cli.add_option("--every", every, "Export every K-th step (default 1)")->check(CLI::Range(1, 100000000));
+  cli.add_option("--every", every, "Export every K-th step (default 1)")
+      ->check(CLI::Range(1, 100000000));
   cli.add_option("--format", format, "Frame format: obj or bin (see sim/frame_export.h)")
       ->check(CLI::IsMember({"obj", "bin"}));
-  cli.add_option("--threads", threads, "Simulation threads (default: all cores)")->check(CLI::Range(1, 256));
+  cli.add_option("--threads", threads, "Simulation threads (default: all cores)")
+      ->check(CLI::Range(1, 256));
   try {
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -77,7 +81,8 @@ int runHeadlessCommand(int argc, char** argv) {
     std::error_code ec;
     std::filesystem::create_directories(exportDir, ec);
     if (ec || !std::filesystem::is_directory(exportDir)) {
-      std::fprintf(stderr, "softbody run: --export %s: cannot create the folder\n", exportDir.c_str());
+      std::fprintf(stderr, "softbody run: --export %s: cannot create the folder\n",
+                   exportDir.c_str());
       return 1;
     }
   }

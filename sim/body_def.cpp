@@ -4,9 +4,12 @@ namespace sb {
 
 const char* modeName(Mode mode) {
   switch (mode) {
-    case Mode::Rigid: return "rigid";
-    case Mode::Linear: return "linear";
-    case Mode::Quadratic: return "quadratic";
+    case Mode::Rigid:
+      return "rigid";
+    case Mode::Linear:
+      return "linear";
+    case Mode::Quadratic:
+      return "quadratic";
   }
   return "?";
 }
@@ -23,9 +26,12 @@ bool parseMode(const std::string& text, Mode* mode) {
 
 const char* clusterKindName(ClusterDef::Kind kind) {
   switch (kind) {
-    case ClusterDef::Kind::Single: return "single";
-    case ClusterDef::Kind::Grid: return "grid";
-    case ClusterDef::Kind::Explicit: return "explicit";
+    case ClusterDef::Kind::Single:
+      return "single";
+    case ClusterDef::Kind::Grid:
+      return "grid";
+    case ClusterDef::Kind::Explicit:
+      return "explicit";
   }
   return "?";
 }

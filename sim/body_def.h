@@ -11,8 +11,8 @@ namespace sb {
 
 // How a cluster's goal positions follow its particles (design.md §5).
 enum class Mode {
-  Rigid,      // goal = R·q + c: the cluster keeps its rest shape exactly
-  Linear,     // goal = (β·A + (1−β)·R)·q + c, A the best affine fit (optionally volume-normalised)
+  Rigid,  // goal = R·q + c: the cluster keeps its rest shape exactly
+  Linear,  // goal = (β·A + (1−β)·R)·q + c, A the best affine fit (optionally volume-normalised)
   Quadratic,  // goal = (β·Ã + (1−β)·[R 0 0])·q̃ + c, allows bending and twisting
 };
 
@@ -67,7 +67,7 @@ struct BodyDef {
   std::vector<Vec3> positions;
   // Per-particle masses in kg (> 0), or empty to split totalMass evenly.
   std::vector<double> masses;
-  double totalMass = 1.0;  // kg, > 0; used when masses is empty
+  double totalMass = 1.0;        // kg, > 0; used when masses is empty
   Vec3 velocity = Vec3::Zero();  // initial velocity of every particle, m/s
   // Particles held in place (indices within the body). They keep their start position and take
   // part in shape matching with their ordinary mass, so they never become infinite weights.

@@ -22,22 +22,22 @@ using Vec9 = Eigen::Matrix<double, 9, 1>;
 
 // Never changes after the cluster is built.
 struct ClusterRestModel {
-  double mass = 0;                  // Σ wᵢ over members (kg); wᵢ = particle mass / #clusters
-  Eigen::Vector3f centre;           // rc, body frame (m); float because kernels use it so
-  Vec3 sumWq0 = Vec3::Zero();       // Σ w q⁰ as the float kernels evaluate q⁰ (≈ 0, kept exact)
-  Vec6 sumWmono0 = Vec6::Zero();    // Σ w mono(q⁰) (kg·m²)
-  Mat9 moments0 = Mat9::Zero();     // Σ w y yᵀ with y = [q⁰, mono(q⁰)]
-  double scale = 1.0;               // RMS radius of q⁰ (m, > 0): normalises quadratic terms
+  double mass = 0;             // Σ wᵢ over members (kg); wᵢ = particle mass / #clusters
+  Eigen::Vector3f centre;      // rc, body frame (m); float because kernels use it so
+  Vec3 sumWq0 = Vec3::Zero();  // Σ w q⁰ as the float kernels evaluate q⁰ (≈ 0, kept exact)
+  Vec6 sumWmono0 = Vec6::Zero();  // Σ w mono(q⁰) (kg·m²)
+  Mat9 moments0 = Mat9::Zero();   // Σ w y yᵀ with y = [q⁰, mono(q⁰)]
+  double scale = 1.0;             // RMS radius of q⁰ (m, > 0): normalises quadratic terms
 };
 
 // Depends on Sᵖ; rebuilt when Sᵖ changes. The quadratic part (a 9×9 eigen-decomposition) is
 // only derived when a body is in quadratic mode.
 struct ClusterShape {
-  bool hasQuadratic = false;    // AqqTildeInv and monoMean are valid
-  Mat3 AqqInv = Mat3::Zero();   // (Σ w q qᵀ)⁺, pseudo-inverse: flat/collinear clusters are fine
+  bool hasQuadratic = false;   // AqqTildeInv and monoMean are valid
+  Mat3 AqqInv = Mat3::Zero();  // (Σ w q qᵀ)⁺, pseudo-inverse: flat/collinear clusters are fine
   Mat9 AqqTildeInv = Mat9::Zero();  // (Σ w q̃ q̃ᵀ)⁺ with q̃ = [q/s, (mono(q) − mean)/s²]
-  Vec6 monoMean = Vec6::Zero();  // mass-weighted mean of mono(q) (m²)
-  Mat6 mono = Mat6::Identity();  // mono(Sᵖ q⁰) = mono · mono(q⁰)
+  Vec6 monoMean = Vec6::Zero();     // mass-weighted mean of mono(q) (m²)
+  Mat6 mono = Mat6::Identity();     // mono(Sᵖ q⁰) = mono · mono(q⁰)
 };
 
 // Quadratic monomials of q, in the order documented above.

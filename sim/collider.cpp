@@ -46,10 +46,14 @@ Collider Collider::capsule(const Vec3& a, const Vec3& b, double radius, double f
 
 const char* colliderShapeName(Collider::Shape shape) {
   switch (shape) {
-    case Collider::Shape::Plane: return "plane";
-    case Collider::Shape::Box: return "box";
-    case Collider::Shape::Sphere: return "sphere";
-    case Collider::Shape::Capsule: return "capsule";
+    case Collider::Shape::Plane:
+      return "plane";
+    case Collider::Shape::Box:
+      return "box";
+    case Collider::Shape::Sphere:
+      return "sphere";
+    case Collider::Shape::Capsule:
+      return "capsule";
   }
   return "?";
 }
@@ -67,9 +71,8 @@ double colliderDistance(const Collider& c, const Vec3& p, Vec3* normal) {
     }
     case Collider::Shape::Capsule: {
       const double axisLen2 = c.axis.squaredNorm();
-      const double s = axisLen2 > 0.0
-                           ? std::clamp((p - c.centre).dot(c.axis) / axisLen2, -1.0, 1.0)
-                           : 0.0;
+      const double s =
+          axisLen2 > 0.0 ? std::clamp((p - c.centre).dot(c.axis) / axisLen2, -1.0, 1.0) : 0.0;
       const Vec3 d = p - (c.centre + s * c.axis);
       const double len = d.norm();
       *normal = len > 0.0 ? Vec3(d / len) : Vec3::UnitY();

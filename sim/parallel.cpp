@@ -5,11 +5,17 @@
 namespace sb {
 
 namespace {
-int defaultThreads() { return omp_get_num_procs(); }
+int defaultThreads() {
+  return omp_get_num_procs();
+}
 }  // namespace
 
-void setThreadCount(int threads) { omp_set_num_threads(threads > 0 ? threads : defaultThreads()); }
+void setThreadCount(int threads) {
+  omp_set_num_threads(threads > 0 ? threads : defaultThreads());
+}
 
-int threadCount() { return omp_get_max_threads(); }
+int threadCount() {
+  return omp_get_max_threads();
+}
 
 }  // namespace sb

@@ -44,7 +44,8 @@ Eigen::Quaterniond rotateBy(const Vec3& omega, const Eigen::Quaterniond& q) {
   const double angle = omega.norm();
   Eigen::Quaterniond dq;
   if (angle < 1e-3) {
-    dq = Eigen::Quaterniond(1.0 - angle * angle / 8.0, 0.5 * omega.x(), 0.5 * omega.y(), 0.5 * omega.z());
+    dq = Eigen::Quaterniond(1.0 - angle * angle / 8.0, 0.5 * omega.x(), 0.5 * omega.y(),
+                            0.5 * omega.z());
   } else {
     dq = Eigen::Quaterniond(Eigen::AngleAxisd(angle, omega / angle));
   }

@@ -50,7 +50,9 @@ class Fields {
     const json& v = j_.at(key);
     if (!v.is_number_integer()) fail(key, "must be an integer");
     const long long d = v.get<long long>();
-    if (d < lo || d > hi) fail(key, "must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " + std::to_string(d));
+    if (d < lo || d > hi)
+      fail(key, "must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " +
+                    std::to_string(d));
     return static_cast<int>(d);
   }
   bool boolean(const std::string& key, bool fallback) {
@@ -74,7 +76,8 @@ class Fields {
     for (int a = 0; a < 3; ++a) {
       if (!v[size_t(a)].is_number()) fail(key, "must be an array of 3 numbers");
       out[a] = v[size_t(a)].get<double>();
-      if (!(std::abs(out[a]) <= limit)) fail(key, "components must be finite and within ±" + fmt(limit));
+      if (!(std::abs(out[a]) <= limit))
+        fail(key, "components must be finite and within ±" + fmt(limit));
     }
     return out;
   }
@@ -82,7 +85,9 @@ class Fields {
     used_.insert(key);
     return j_.at(key);
   }
-  std::string where(const std::string& key) const { return where_ + (where_.empty() ? "" : ".") + key; }
+  std::string where(const std::string& key) const {
+    return where_ + (where_.empty() ? "" : ".") + key;
+  }
   const std::string& file() const { return file_; }
   // Call after reading every known key.
   void rejectUnknown() const {
@@ -328,7 +333,9 @@ Scene loadScene(const std::string& path) {
 
 namespace {
 
-json vec(const Vec3& v) { return json::array({v.x(), v.y(), v.z()}); }
+json vec(const Vec3& v) {
+  return json::array({v.x(), v.y(), v.z()});
+}
 
 // A path as written in the scene, re-expressed relative to the folder of the file being saved.
 std::string rebase(const std::string& path, const std::string& fromDir, const std::string& toDir) {
@@ -391,7 +398,9 @@ void saveScene(const Scene& scene, const std::string& path) {
               {"preserveVolume", p.preserveVolume},
               {"damping", p.damping},
               {"plasticity",
-               {{"yield", p.plasticity.yield}, {"creep", p.plasticity.creep}, {"max", p.plasticity.max}}}};
+               {{"yield", p.plasticity.yield},
+                {"creep", p.plasticity.creep},
+                {"max", p.plasticity.max}}}};
     if (b.render) j["renderMesh"] = rebase(b.render->path, fromDir, toDir);
     const ClusterDef& c = w.clusterDef(b.handle);
     json cj = {{"kind", clusterKindName(c.kind)}};
@@ -441,6 +450,8 @@ const std::vector<std::array<int, 3>>& Scene::renderTriangles(int body) const {
   return b.render ? b.render->triangles : b.cageTriangles;
 }
 
-std::string defaultScenePath() { return std::string(SOFTBODY_ASSET_DIR) + "/scenes/default.json"; }
+std::string defaultScenePath() {
+  return std::string(SOFTBODY_ASSET_DIR) + "/scenes/default.json";
+}
 
 }  // namespace sb

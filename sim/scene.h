@@ -29,14 +29,14 @@ class SceneError : public std::runtime_error {
 
 // A detailed mesh that follows a body's particles (the cage) through a weight matrix.
 struct RenderMesh {
-  std::string path;                            // as written in the scene file
-  std::vector<std::array<int, 3>> triangles;   // indices into the mesh vertices
+  std::string path;                                  // as written in the scene file
+  std::vector<std::array<int, 3>> triangles;         // indices into the mesh vertices
   std::shared_ptr<const cage::Embedding> embedding;  // #mesh vertices × #particles
 };
 
 struct SceneBody {
   BodyHandle handle;
-  std::string meshPath;          // particles = this mesh's vertices (as written in the file)
+  std::string meshPath;  // particles = this mesh's vertices (as written in the file)
   std::vector<std::array<int, 3>> cageTriangles;  // the particle mesh's faces (may be empty)
   std::shared_ptr<RenderMesh> render;             // null when the body has no render mesh
   // The transform and scale applied to the file's vertices, kept so the scene can be saved.

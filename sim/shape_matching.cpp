@@ -81,14 +81,16 @@ ClusterMoments accumulate(const ParticleColumns& p, const int* members, int begi
 // Small clusters (a tetrahedron, a handful of particles): straight double sums, no lane
 // bookkeeping, which for a few members costs more than the sums themselves.
 ClusterMoments accumulateSmall(const ParticleColumns& p, const int* members, int begin, int end,
-                               const Eigen::Vector3f& ref, const Eigen::Vector3f& rc, bool quadratic) {
+                               const Eigen::Vector3f& ref, const Eigen::Vector3f& rc,
+                               bool quadratic) {
   Eigen::Vector3f wdSum = Eigen::Vector3f::Zero();
   Eigen::Matrix3f wdq = Eigen::Matrix3f::Zero();
   Eigen::Matrix<float, 3, 6> wdm = Eigen::Matrix<float, 3, 6>::Zero();
   for (int k = begin; k < end; ++k) {
     const int i = members ? members[k] : k;
     const float w = p.w[i];
-    const Eigen::Vector3f wd = w * Eigen::Vector3f(p.x[0][i] - ref.x(), p.x[1][i] - ref.y(), p.x[2][i] - ref.z());
+    const Eigen::Vector3f wd =
+        w * Eigen::Vector3f(p.x[0][i] - ref.x(), p.x[1][i] - ref.y(), p.x[2][i] - ref.z());
     const Eigen::Vector3f q(p.r[0][i] - rc.x(), p.r[1][i] - rc.y(), p.r[2][i] - rc.z());
     wdSum += wd;
     wdq.noalias() += wd * q.transpose();
@@ -104,7 +106,8 @@ ClusterMoments accumulateSmall(const ParticleColumns& p, const int* members, int
 ClusterMoments accumulateMoments(const ParticleColumns& p, const int* members, int begin, int end,
                                  const Eigen::Vector3f& ref, const Eigen::Vector3f& restCentre,
                                  bool quadratic) {
-  if (end - begin < 2 * kLanes) return accumulateSmall(p, members, begin, end, ref, restCentre, quadratic);
+  if (end - begin < 2 * kLanes)
+    return accumulateSmall(p, members, begin, end, ref, restCentre, quadratic);
   if (members) {
     return quadratic ? accumulate<true, true>(p, members, begin, end, ref, restCentre)
                      : accumulate<true, false>(p, members, begin, end, ref, restCentre);
@@ -114,8 +117,8 @@ ClusterMoments accumulateMoments(const ParticleColumns& p, const int* members, i
 }
 
 ClusterFit fitCluster(const ClusterMoments& m, const Eigen::Vector3f& ref,
-                      const ClusterRestModel& rest, const ClusterShape& shape,
-                      const Mat3& plastic, const Eigen::Quaterniond& warmRotation) {
+                      const ClusterRestModel& rest, const ClusterShape& shape, const Mat3& plastic,
+                      const Eigen::Quaterniond& warmRotation) {
   ClusterFit fit;
   const Vec3 dc = m.wd / rest.mass;
   fit.centre = ref.cast<double>() + dc;
@@ -139,7 +142,7 @@ GoalTransform goalTransform(const ClusterFit& fit, const ClusterMoments& m,
                             const BodyParams& params) {
   const Mat3 R = fit.rotation.matrix();
   const double beta = params.beta;
-  Mat3 Tlin = R;                                                   // acts on q
+  Mat3 Tlin = R;                                                            // acts on q
   Eigen::Matrix<double, 3, 6> Tquad = Eigen::Matrix<double, 3, 6>::Zero();  // acts on mono(q) − μ
   switch (params.mode) {
     case Mode::Rigid:

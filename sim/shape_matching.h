@@ -13,8 +13,8 @@ namespace sb {
 // Sums over (part of) a cluster, relative to a reference point `ref` near the centre of mass
 // (keeps float sums accurate far from the origin). d = x − ref, q⁰ = r − rc.
 struct ClusterMoments {
-  Vec3 wd = Vec3::Zero();                                   // Σ w d
-  Mat3 wdq = Mat3::Zero();                                  // Σ w d q⁰ᵀ
+  Vec3 wd = Vec3::Zero();                                                 // Σ w d
+  Mat3 wdq = Mat3::Zero();                                                // Σ w d q⁰ᵀ
   Eigen::Matrix<double, 3, 6> wdm = Eigen::Matrix<double, 3, 6>::Zero();  // Σ w d mono(q⁰)ᵀ
   ClusterMoments& operator+=(const ClusterMoments& o) {
     wd += o.wd;
@@ -50,16 +50,16 @@ struct GoalTransform {
 
 // Everything computeGoalTransform derives, for plasticity and diagnostics.
 struct ClusterFit {
-  Vec3 centre;           // x_cm (m)
-  Mat3 Apq;              // Σ w p qᵀ
+  Vec3 centre;  // x_cm (m)
+  Mat3 Apq;     // Σ w p qᵀ
   Eigen::Quaterniond rotation;
-  Mat3 linear;           // A = A_pq·A_qq (not volume-normalised)
-  bool finite = true;    // false when the moments held NaN/Inf
+  Mat3 linear;         // A = A_pq·A_qq (not volume-normalised)
+  bool finite = true;  // false when the moments held NaN/Inf
 };
 
 ClusterFit fitCluster(const ClusterMoments& m, const Eigen::Vector3f& ref,
-                      const ClusterRestModel& rest, const ClusterShape& shape,
-                      const Mat3& plastic, const Eigen::Quaterniond& warmRotation);
+                      const ClusterRestModel& rest, const ClusterShape& shape, const Mat3& plastic,
+                      const Eigen::Quaterniond& warmRotation);
 
 // The goal transform for `mode` with blend β (linear/quadratic) and optional volume
 // preservation (linear). Falls back to the rotation when the linear fit is inverted or flat.

@@ -12,7 +12,8 @@ using Vec3f = Eigen::Vector3f;
 // Positions of a set of points, one row per point, columns x, y, z (#P×3, metres). Column-major
 // storage with an outer stride, so a body's rows inside the World's structure-of-arrays particle
 // storage can be viewed without copying.
-using ConstPointsRef = Eigen::Ref<const Eigen::Matrix<float, Eigen::Dynamic, 3>, 0, Eigen::OuterStride<>>;
+using ConstPointsRef =
+    Eigen::Ref<const Eigen::Matrix<float, Eigen::Dynamic, 3>, 0, Eigen::OuterStride<>>;
 
 // Interleaved xyz rows (#P×3, row-major): the layout vertex buffers and OBJ files use.
 using PointsRowMajor = Eigen::Matrix<float, Eigen::Dynamic, 3, Eigen::RowMajor>;

@@ -20,7 +20,7 @@ namespace {
 using MatX3f = Eigen::Matrix<float, Eigen::Dynamic, 3>;
 using Clock = std::chrono::steady_clock;
 
-constexpr int kMembersPerTask = 8192;    // cluster members per moment task
+constexpr int kMembersPerTask = 8192;     // cluster members per moment task
 constexpr int kParticlesPerBlock = 4096;  // particles per integration/collision block
 // Below this many particles (or cluster members) a phase runs on one thread: fork/join would
 // cost more than it saves.
@@ -84,12 +84,12 @@ struct BodyModel {
 
 // What changes every step.
 struct BodyState {
-  MatX3f x, v;  // positions (m) and velocities (m/s), #P×3
-  std::vector<Mat3> plastic;                // Sᵖ per cluster
-  std::vector<ClusterShape> shape;          // derived from Sᵖ
-  std::vector<Eigen::Quaterniond> rotation; // warm start of the rotation extraction
-  std::vector<Eigen::Vector3f> ref;         // last centre of mass: reference for float sums
-  std::vector<GoalTransform> goal;          // per cluster, written by the Goals phase
+  MatX3f x, v;                               // positions (m) and velocities (m/s), #P×3
+  std::vector<Mat3> plastic;                 // Sᵖ per cluster
+  std::vector<ClusterShape> shape;           // derived from Sᵖ
+  std::vector<Eigen::Quaterniond> rotation;  // warm start of the rotation extraction
+  std::vector<Eigen::Vector3f> ref;          // last centre of mass: reference for float sums
+  std::vector<GoalTransform> goal;           // per cluster, written by the Goals phase
 };
 
 struct BodySlot {
@@ -145,7 +145,8 @@ std::shared_ptr<BodyModel> buildModel(const BodyDef& def, const ClusterDef& clus
     for (int p : list) ++count[size_t(p)];
   }
   m->particleStart.assign(size_t(n) + 1, 0);
-  for (int i = 0; i < n; ++i) m->particleStart[size_t(i) + 1] = m->particleStart[size_t(i)] + count[size_t(i)];
+  for (int i = 0; i < n; ++i)
+    m->particleStart[size_t(i) + 1] = m->particleStart[size_t(i)] + count[size_t(i)];
   m->particleClusters.assign(m->members.size(), 0);
   std::vector<int> fill(m->particleStart.begin(), m->particleStart.end() - 1);
   for (int c = 0; c < nc; ++c)
@@ -163,9 +164,9 @@ std::shared_ptr<BodyModel> buildModel(const BodyDef& def, const ClusterDef& clus
   m->taskStart.assign(1, 0);
   for (int c = 0; c < nc; ++c) {
     const int b = m->memberStart[size_t(c)], e = m->memberStart[size_t(c) + 1];
-    m->clusterRest[size_t(c)] = buildClusterRest(m->members.data() + b, e - b, m->rest.col(0).data(),
-                                                 m->rest.col(1).data(), m->rest.col(2).data(),
-                                                 m->matchWeight.data());
+    m->clusterRest[size_t(c)] =
+        buildClusterRest(m->members.data() + b, e - b, m->rest.col(0).data(), m->rest.col(1).data(),
+                         m->rest.col(2).data(), m->matchWeight.data());
     for (int k = b; k < e; k += kMembersPerTask)
       m->tasks.push_back({c, k, std::min(e, k + kMembersPerTask)});
     m->taskStart.push_back(static_cast<int>(m->tasks.size()));
@@ -257,7 +258,8 @@ struct World::Data {
   std::vector<char> clusterBad, blockBad, bad;
 
   BodySlot& slot(BodyHandle h) {
-    if (h.index >= slots.size() || !slots[h.index].alive || slots[h.index].generation != h.generation)
+    if (h.index >= slots.size() || !slots[h.index].alive ||
+        slots[h.index].generation != h.generation)
       throw std::invalid_argument("unknown body handle");
     return slots[h.index];
   }
@@ -289,7 +291,8 @@ void World::Data::applyExternal(double h) {
     double sumW2 = 0;
     for (size_t k = 0; k < drag.particles.size(); ++k) {
       point += drag.weights[k] * b.state.x.row(drag.particles[k]).transpose().cast<double>();
-      pointVelocity += drag.weights[k] * b.state.v.row(drag.particles[k]).transpose().cast<double>();
+      pointVelocity +=
+          drag.weights[k] * b.state.v.row(drag.particles[k]).transpose().cast<double>();
       sumW2 += drag.weights[k] * drag.weights[k];
     }
     // Give the dragged point the velocity that closes `stiffness` of the gap over this sub-step,
@@ -313,55 +316,61 @@ void World::Data::computeGoals(double h, std::vector<char>& badBodies, StepProfi
     const BodySlot& b = slots[size_t(tasks[size_t(i)].slot)];
     const BodyModel& m = *b.model;
     const MomentTask& task = m.tasks[size_t(tasks[size_t(i)].task)];
-    ParticleColumns cols{{b.state.x.col(0).data(), b.state.x.col(1).data(), b.state.x.col(2).data()},
-                         {m.rest.col(0).data(), m.rest.col(1).data(), m.rest.col(2).data()},
-                         m.matchWeight.data()};
+    ParticleColumns cols{
+        {b.state.x.col(0).data(), b.state.x.col(1).data(), b.state.x.col(2).data()},
+        {m.rest.col(0).data(), m.rest.col(1).data(), m.rest.col(2).data()},
+        m.matchWeight.data()};
     const bool quadratic = b.params.mode == Mode::Quadratic;
-    partial[size_t(i)] = m.wholeBodyCluster
-        ? accumulateMoments(cols, nullptr, task.begin, task.end, b.state.ref[size_t(task.cluster)],
-                            m.clusterRest[size_t(task.cluster)].centre, quadratic)
-        : accumulateMoments(cols, m.members.data(), task.begin, task.end,
-                            b.state.ref[size_t(task.cluster)],
-                            m.clusterRest[size_t(task.cluster)].centre, quadratic);
+    partial[size_t(i)] =
+        m.wholeBodyCluster
+            ? accumulateMoments(cols, nullptr, task.begin, task.end,
+                                b.state.ref[size_t(task.cluster)],
+                                m.clusterRest[size_t(task.cluster)].centre, quadratic)
+            : accumulateMoments(cols, m.members.data(), task.begin, task.end,
+                                b.state.ref[size_t(task.cluster)],
+                                m.clusterRest[size_t(task.cluster)].centre, quadratic);
   });
   // Per cluster: sum its tasks in order, fit, plastic flow, goal transform.
   plasticSeconds.assign(clusters.size(), 0.0);
   clusterBad.assign(clusters.size(), 0);
-  parallelFor(static_cast<int>(clusters.size()), clusters.size() >= 512 ? 2 : INT32_MAX, [&](int i) {
-    const GlobalCluster& gc = clusters[size_t(i)];
-    BodySlot& b = slots[size_t(gc.slot)];
-    const BodyModel& m = *b.model;
-    BodyState& s = b.state;
-    const size_t c = size_t(gc.cluster);
-    const int taskCount = m.taskStart[c + 1] - m.taskStart[c];
-    ClusterMoments& sum = partial[size_t(gc.firstTask)];  // tasks of a cluster summed in order
-    for (int t = 1; t < taskCount; ++t) sum += partial[size_t(gc.firstTask + t)];
-    const Eigen::Vector3f ref = s.ref[c];
-    const bool quadratic = b.params.mode == Mode::Quadratic;
-    if (quadratic && !s.shape[c].hasQuadratic)  // switched to quadratic since the last derive
-      s.shape[c] = deriveClusterShape(m.clusterRest[c], s.plastic[c], true);
-    ClusterFit fit = fitCluster(sum, ref, m.clusterRest[c], s.shape[c], s.plastic[c], s.rotation[c]);
-    if (!fit.finite) {
-      clusterBad[size_t(i)] = 1;
-      return;
-    }
-    if (b.params.plasticity.enabled()) {
-      const auto tp = Clock::now();
-      const Mat3 R = fit.rotation.matrix();
-      const Mat3 stretch = R.transpose() * fit.linear;
-      if (updatePlasticDeformation(0.5 * (stretch + stretch.transpose()), h, b.params.plasticity,
-                                   s.plastic[c])) {
-        s.shape[c] = deriveClusterShape(m.clusterRest[c], s.plastic[c], quadratic);
-        fit = fitCluster(sum, ref, m.clusterRest[c], s.shape[c], s.plastic[c], fit.rotation);
-      }
-      plasticSeconds[size_t(i)] = secondsSince(tp);
-    }
-    s.rotation[c] = fit.rotation;
-    s.ref[c] = fit.centre.cast<float>();
-    s.goal[c] = goalTransform(fit, sum, ref, m.clusterRest[c], s.shape[c], s.plastic[c], b.params);
-    if (!s.goal[c].L.allFinite() || !s.goal[c].Q.allFinite() || !s.goal[c].t.allFinite())
-      clusterBad[size_t(i)] = 1;
-  });
+  parallelFor(
+      static_cast<int>(clusters.size()), clusters.size() >= 512 ? 2 : INT32_MAX, [&](int i) {
+        const GlobalCluster& gc = clusters[size_t(i)];
+        BodySlot& b = slots[size_t(gc.slot)];
+        const BodyModel& m = *b.model;
+        BodyState& s = b.state;
+        const size_t c = size_t(gc.cluster);
+        const int taskCount = m.taskStart[c + 1] - m.taskStart[c];
+        ClusterMoments& sum = partial[size_t(gc.firstTask)];  // tasks of a cluster summed in order
+        for (int t = 1; t < taskCount; ++t) sum += partial[size_t(gc.firstTask + t)];
+        const Eigen::Vector3f ref = s.ref[c];
+        const bool quadratic = b.params.mode == Mode::Quadratic;
+        if (quadratic && !s.shape[c].hasQuadratic)  // switched to quadratic since the last derive
+          s.shape[c] = deriveClusterShape(m.clusterRest[c], s.plastic[c], true);
+        ClusterFit fit =
+            fitCluster(sum, ref, m.clusterRest[c], s.shape[c], s.plastic[c], s.rotation[c]);
+        if (!fit.finite) {
+          clusterBad[size_t(i)] = 1;
+          return;
+        }
+        if (b.params.plasticity.enabled()) {
+          const auto tp = Clock::now();
+          const Mat3 R = fit.rotation.matrix();
+          const Mat3 stretch = R.transpose() * fit.linear;
+          if (updatePlasticDeformation(0.5 * (stretch + stretch.transpose()), h,
+                                       b.params.plasticity, s.plastic[c])) {
+            s.shape[c] = deriveClusterShape(m.clusterRest[c], s.plastic[c], quadratic);
+            fit = fitCluster(sum, ref, m.clusterRest[c], s.shape[c], s.plastic[c], fit.rotation);
+          }
+          plasticSeconds[size_t(i)] = secondsSince(tp);
+        }
+        s.rotation[c] = fit.rotation;
+        s.ref[c] = fit.centre.cast<float>();
+        s.goal[c] =
+            goalTransform(fit, sum, ref, m.clusterRest[c], s.shape[c], s.plastic[c], b.params);
+        if (!s.goal[c].L.allFinite() || !s.goal[c].Q.allFinite() || !s.goal[c].t.allFinite())
+          clusterBad[size_t(i)] = 1;
+      });
   double plasticTotal = 0;
   for (size_t i = 0; i < clusters.size(); ++i) {
     plasticTotal += plasticSeconds[i];
@@ -451,8 +460,8 @@ int integrateQuadraticRange(float* __restrict px, float* __restrict py, float* _
     const float xx = x * x, yy = y * y, zz = z * z, xy = x * y, yz = y * z, zx = z * x;
     float g[3];
     for (int a = 0; a < 3; ++a)
-      g[a] = C[a][0] * x + C[a][1] * y + C[a][2] * z + C[a][3] * xx + C[a][4] * yy +
-             C[a][5] * zz + C[a][6] * xy + C[a][7] * yz + C[a][8] * zx + C[a][9];
+      g[a] = C[a][0] * x + C[a][1] * y + C[a][2] * z + C[a][3] * xx + C[a][4] * yy + C[a][5] * zz +
+             C[a][6] * xy + C[a][7] * yz + C[a][8] * zx + C[a][9];
     const float nvx = vx[i] + pull * (g[0] - px[i]) + gvx;
     const float nvy = vy[i] + pull * (g[1] - py[i]) + gvy;
     const float nvz = vz[i] + pull * (g[2] - pz[i]) + gvz;
@@ -482,7 +491,8 @@ bool integrateBlock(const BodyModel& m, BodyState& s, const BodyParams& params, 
   const float* rz = m.rest.col(2).data();
   const float hf = float(h);
   const float pull = float(params.alpha / h);
-  const float gvx = float(h * gravity.x()), gvy = float(h * gravity.y()), gvz = float(h * gravity.z());
+  const float gvx = float(h * gravity.x()), gvy = float(h * gravity.y()),
+              gvz = float(h * gravity.z());
   const bool quadratic = params.mode == Mode::Quadratic;
   auto run = [&](auto goal) {
     return integrateRange(px, py, pz, vx, vy, vz, begin, end, hf, pull, gvx, gvy, gvz, goal) != 0;
@@ -522,12 +532,13 @@ bool integrateBlock(const BodyModel& m, BodyState& s, const BodyParams& params, 
 void World::Data::integrate(double h, std::vector<char>& badBodies) {
   const std::vector<ParticleBlock>& blocks = layout.blocks;
   blockBad.assign(blocks.size(), 0);
-  parallelFor(static_cast<int>(blocks.size()), layout.particles >= kMinParallelWork ? 2 : INT32_MAX, [&](int i) {
-    const ParticleBlock& blk = blocks[size_t(i)];
-    BodySlot& b = slots[size_t(blk.slot)];
-    blockBad[size_t(i)] =
-        integrateBlock(*b.model, b.state, b.params, settings.gravity, h, blk.begin, blk.end);
-  });
+  parallelFor(static_cast<int>(blocks.size()), layout.particles >= kMinParallelWork ? 2 : INT32_MAX,
+              [&](int i) {
+                const ParticleBlock& blk = blocks[size_t(i)];
+                BodySlot& b = slots[size_t(blk.slot)];
+                blockBad[size_t(i)] = integrateBlock(*b.model, b.state, b.params, settings.gravity,
+                                                     h, blk.begin, blk.end);
+              });
   for (size_t i = 0; i < blocks.size(); ++i)
     if (blockBad[i]) badBodies[size_t(blocks[i].slot)] = 1;
   // Pinned particles stay where they started.
@@ -579,35 +590,36 @@ void World::Data::damp() {
 void World::Data::collide() {
   if (colliders.empty()) return;
   const std::vector<ParticleBlock>& blocks = layout.blocks;
-  parallelFor(static_cast<int>(blocks.size()), layout.particles >= kMinParallelWork ? 2 : INT32_MAX, [&](int i) {
-    const ParticleBlock& blk = blocks[size_t(i)];
-    BodyState& s = slots[size_t(blk.slot)].state;
-    for (int p = blk.begin; p < blk.end; ++p) {
-      Vec3 x = s.x.row(p).transpose().cast<double>();
-      Vec3 v = s.v.row(p).transpose().cast<double>();
-      bool touched = false;
-      for (const Collider& c : colliders) {
-        Vec3 n;
-        const double d = colliderDistance(c, x, &n);
-        if (!(d < 0.0)) continue;
-        touched = true;
-        x -= d * n;  // back onto the surface
-        const double vn = v.dot(n);
-        if (vn < 0.0) {
-          Vec3 vt = v - vn * n;
-          // Coulomb: tangential speed lost is at most μ times the normal speed removed.
-          const double vtLen = vt.norm();
-          const double loss = c.friction * -vn;
-          vt = vtLen <= loss ? Vec3::Zero() : Vec3(vt * (1.0 - loss / vtLen));
-          v = vt;
-        }
-      }
-      if (touched) {
-        s.x.row(p) = x.transpose().cast<float>();
-        s.v.row(p) = v.transpose().cast<float>();
-      }
-    }
-  });
+  parallelFor(static_cast<int>(blocks.size()), layout.particles >= kMinParallelWork ? 2 : INT32_MAX,
+              [&](int i) {
+                const ParticleBlock& blk = blocks[size_t(i)];
+                BodyState& s = slots[size_t(blk.slot)].state;
+                for (int p = blk.begin; p < blk.end; ++p) {
+                  Vec3 x = s.x.row(p).transpose().cast<double>();
+                  Vec3 v = s.v.row(p).transpose().cast<double>();
+                  bool touched = false;
+                  for (const Collider& c : colliders) {
+                    Vec3 n;
+                    const double d = colliderDistance(c, x, &n);
+                    if (!(d < 0.0)) continue;
+                    touched = true;
+                    x -= d * n;  // back onto the surface
+                    const double vn = v.dot(n);
+                    if (vn < 0.0) {
+                      Vec3 vt = v - vn * n;
+                      // Coulomb: tangential speed lost is at most μ times the normal speed removed.
+                      const double vtLen = vt.norm();
+                      const double loss = c.friction * -vn;
+                      vt = vtLen <= loss ? Vec3::Zero() : Vec3(vt * (1.0 - loss / vtLen));
+                      v = vt;
+                    }
+                  }
+                  if (touched) {
+                    s.x.row(p) = x.transpose().cast<float>();
+                    s.v.row(p) = v.transpose().cast<float>();
+                  }
+                }
+              });
 }
 
 void World::Data::rebuildLayout() {
@@ -653,9 +665,8 @@ void World::Data::substep(double h, StepProfile& prof) {
     if (!bad[size_t(s)]) continue;
     BodySlot& b = slots[size_t(s)];
     resetBodyState(*b.model, b.state);
-    events.push_back({handleOf(s), "body '" + b.model->name +
-                                       "' produced NaN/Inf (time " + str(time) +
-                                       " s); it was reset to its start state"});
+    events.push_back({handleOf(s), "body '" + b.model->name + "' produced NaN/Inf (time " +
+                                       str(time) + " s); it was reset to its start state"});
   }
   prof.check += secondsSince(t);
 }
@@ -663,7 +674,9 @@ void World::Data::substep(double h, StepProfile& prof) {
 // ---------------------------------------------------------------------------------------------
 // Public API.
 
-World::World(const WorldSettings& settings) : d_(std::make_unique<Data>()) { setSettings(settings); }
+World::World(const WorldSettings& settings) : d_(std::make_unique<Data>()) {
+  setSettings(settings);
+}
 World::~World() = default;
 World::World(World&&) noexcept = default;
 World& World::operator=(World&&) noexcept = default;
@@ -673,7 +686,9 @@ World& World::operator=(const World& o) {
   return *this;
 }
 
-const WorldSettings& World::settings() const { return d_->settings; }
+const WorldSettings& World::settings() const {
+  return d_->settings;
+}
 
 void World::setSettings(const WorldSettings& s) {
   if (!s.gravity.allFinite() || s.gravity.norm() > 1e4)
@@ -681,7 +696,8 @@ void World::setSettings(const WorldSettings& s) {
   if (!(s.timeStep > 0.0 && s.timeStep <= 10.0))
     throw std::invalid_argument("timeStep: must be in (0, 10] seconds, got " + str(s.timeStep));
   if (s.substeps < 1 || s.substeps > 1000)
-    throw std::invalid_argument("substeps: must be in [1, 1000], got " + std::to_string(s.substeps));
+    throw std::invalid_argument("substeps: must be in [1, 1000], got " +
+                                std::to_string(s.substeps));
   d_->settings = s;
 }
 
@@ -712,8 +728,12 @@ void World::addCollider(const Collider& c) {
   d_->colliders.push_back(c);
 }
 
-void World::clearColliders() { d_->colliders.clear(); }
-const std::vector<Collider>& World::colliders() const { return d_->colliders; }
+void World::clearColliders() {
+  d_->colliders.clear();
+}
+const std::vector<Collider>& World::colliders() const {
+  return d_->colliders;
+}
 
 BodyHandle World::addBody(const BodyDef& def) {
   const int n = static_cast<int>(def.positions.size());
@@ -724,8 +744,8 @@ BodyHandle World::addBody(const BodyDef& def) {
       throw std::invalid_argument("positions[" + std::to_string(i) + "]: not finite");
   if (!def.masses.empty()) {
     if (int(def.masses.size()) != n)
-      throw std::invalid_argument("masses: " + std::to_string(def.masses.size()) +
-                                  " values for " + std::to_string(n) + " particles");
+      throw std::invalid_argument("masses: " + std::to_string(def.masses.size()) + " values for " +
+                                  std::to_string(n) + " particles");
     for (int i = 0; i < n; ++i)
       if (!(def.masses[size_t(i)] > 0.0) || !std::isfinite(def.masses[size_t(i)]))
         throw std::invalid_argument("masses[" + std::to_string(i) + "]: must be > 0");
@@ -782,8 +802,12 @@ std::vector<BodyHandle> World::bodies() const {
   return out;
 }
 
-const std::string& World::name(BodyHandle h) const { return d_->slot(h).model->name; }
-const BodyParams& World::params(BodyHandle h) const { return d_->slot(h).params; }
+const std::string& World::name(BodyHandle h) const {
+  return d_->slot(h).model->name;
+}
+const BodyParams& World::params(BodyHandle h) const {
+  return d_->slot(h).params;
+}
 
 void World::setParams(BodyHandle h, const BodyParams& p) {
   BodySlot& s = d_->slot(h);
@@ -791,7 +815,9 @@ void World::setParams(BodyHandle h, const BodyParams& p) {
   s.params = p;
 }
 
-const ClusterDef& World::clusterDef(BodyHandle h) const { return d_->slot(h).model->clusterDef; }
+const ClusterDef& World::clusterDef(BodyHandle h) const {
+  return d_->slot(h).model->clusterDef;
+}
 
 void World::setClusters(BodyHandle h, const ClusterDef& clusters) {
   BodySlot& s = d_->slot(h);
@@ -801,7 +827,9 @@ void World::setClusters(BodyHandle h, const ClusterDef& clusters) {
   d_->layoutDirty = true;
 }
 
-int World::clusterCount(BodyHandle h) const { return d_->slot(h).model->clusterCount(); }
+int World::clusterCount(BodyHandle h) const {
+  return d_->slot(h).model->clusterCount();
+}
 
 std::vector<std::vector<int>> World::clusterMembers(BodyHandle h) const {
   const BodyModel& m = *d_->slot(h).model;
@@ -812,14 +840,26 @@ std::vector<std::vector<int>> World::clusterMembers(BodyHandle h) const {
   return out;
 }
 
-int World::particleCount(BodyHandle h) const { return d_->slot(h).model->particleCount(); }
+int World::particleCount(BodyHandle h) const {
+  return d_->slot(h).model->particleCount();
+}
 
-ConstPointsRef World::positions(BodyHandle h) const { return d_->slot(h).state.x; }
-ConstPointsRef World::velocities(BodyHandle h) const { return d_->slot(h).state.v; }
-ConstPointsRef World::restPositions(BodyHandle h) const { return d_->slot(h).model->startPositions; }
+ConstPointsRef World::positions(BodyHandle h) const {
+  return d_->slot(h).state.x;
+}
+ConstPointsRef World::velocities(BodyHandle h) const {
+  return d_->slot(h).state.v;
+}
+ConstPointsRef World::restPositions(BodyHandle h) const {
+  return d_->slot(h).model->startPositions;
+}
 
-Eigen::VectorXf World::masses(BodyHandle h) const { return d_->slot(h).model->mass; }
-double World::mass(BodyHandle h) const { return d_->slot(h).model->totalMass; }
+Eigen::VectorXf World::masses(BodyHandle h) const {
+  return d_->slot(h).model->mass;
+}
+double World::mass(BodyHandle h) const {
+  return d_->slot(h).model->totalMass;
+}
 
 Vec3 World::centreOfMass(BodyHandle h) const {
   const BodySlot& s = d_->slot(h);
@@ -921,9 +961,13 @@ void World::setDragStiffness(int id, double stiffness) {
   it->second.stiffness = stiffness;
 }
 
-void World::removeDrag(int id) { d_->drags.erase(id); }
+void World::removeDrag(int id) {
+  d_->drags.erase(id);
+}
 
-void World::step() { step(d_->settings.timeStep); }
+void World::step() {
+  step(d_->settings.timeStep);
+}
 
 void World::step(double dt) {
   if (!(dt > 0.0 && dt <= 10.0))
@@ -946,8 +990,12 @@ void World::reset() {
   d_->time = 0;
 }
 
-double World::time() const { return d_->time; }
-const StepProfile& World::lastProfile() const { return d_->profile; }
+double World::time() const {
+  return d_->time;
+}
+const StepProfile& World::lastProfile() const {
+  return d_->profile;
+}
 
 std::vector<WorldEvent> World::takeEvents() {
   std::vector<WorldEvent> out;

@@ -47,10 +47,10 @@ struct BodyHandle {
 // brings the point onto the target, design.md §6), so shape matching keeps acting.
 struct DragDef {
   BodyHandle body;
-  std::vector<int> particles;     // indices within the body
-  std::vector<double> weights;    // same length; e.g. a surface point's cage weights
-  Vec3 target = Vec3::Zero();     // metres
-  double stiffness = 0.2;         // fraction of the gap closed per step, in (0, 1]
+  std::vector<int> particles;   // indices within the body
+  std::vector<double> weights;  // same length; e.g. a surface point's cage weights
+  Vec3 target = Vec3::Zero();   // metres
+  double stiffness = 0.2;       // fraction of the gap closed per step, in (0, 1]
 };
 
 // Something the user should be told about (a body that went NaN and was reset, ...).
@@ -100,7 +100,7 @@ class World {
   ConstPointsRef velocities(BodyHandle body) const;
   ConstPointsRef restPositions(BodyHandle body) const;
   Eigen::VectorXf masses(BodyHandle body) const;  // kg per particle (#P)
-  double mass(BodyHandle body) const;           // kg
+  double mass(BodyHandle body) const;             // kg
   Vec3 centreOfMass(BodyHandle body) const;
   Vec3 linearMomentum(BodyHandle body) const;
   Vec3 angularMomentum(BodyHandle body, const Vec3& about = Vec3::Zero()) const;
@@ -122,10 +122,10 @@ class World {
   void removeDrag(int id);
 
   // ---- time ----
-  void step();            // advance by settings().timeStep in settings().substeps sub-steps
-  void step(double dt);   // advance by dt seconds (> 0) in settings().substeps sub-steps
-  void reset();           // every body back to its start state; plasticity and drags cleared
-  double time() const;    // seconds simulated since creation or reset
+  void step();           // advance by settings().timeStep in settings().substeps sub-steps
+  void step(double dt);  // advance by dt seconds (> 0) in settings().substeps sub-steps
+  void reset();          // every body back to its start state; plasticity and drags cleared
+  double time() const;   // seconds simulated since creation or reset
   const StepProfile& lastProfile() const;  // phases of the last step() call
   std::vector<WorldEvent> takeEvents();    // returns and clears pending events
 

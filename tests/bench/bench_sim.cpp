@@ -37,8 +37,8 @@ void squash(World& world, BodyHandle b) {
 
 void runSteps(benchmark::State& state, World& world, double particles, double memberships) {
   for (auto _ : state) world.step();
-  state.counters["ns_per_particle"] =
-      benchmark::Counter(particles, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  state.counters["ns_per_particle"] = benchmark::Counter(
+      particles, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
   if (memberships > 0)
     state.counters["ns_per_membership"] = benchmark::Counter(
         memberships, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
@@ -60,8 +60,12 @@ void singleCluster(benchmark::State& state, Mode mode) {
   setThreadCount(0);
 }
 
-void BM_LinearOneCluster(benchmark::State& state) { singleCluster(state, Mode::Linear); }
-void BM_QuadraticOneCluster(benchmark::State& state) { singleCluster(state, Mode::Quadratic); }
+void BM_LinearOneCluster(benchmark::State& state) {
+  singleCluster(state, Mode::Linear);
+}
+void BM_QuadraticOneCluster(benchmark::State& state) {
+  singleCluster(state, Mode::Quadratic);
+}
 BENCHMARK(BM_LinearOneCluster)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_QuadraticOneCluster)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
@@ -100,8 +104,8 @@ void BM_TetBar(benchmark::State& state) {
   for (int k = 0; k + 1 < nz; ++k)
     for (int j = 0; j + 1 < ny; ++j)
       for (int i = 0; i + 1 < nx; ++i) {
-        const int c[8] = {id(i, j, k),         id(i + 1, j, k),         id(i, j + 1, k),
-                          id(i + 1, j + 1, k), id(i, j, k + 1),         id(i + 1, j, k + 1),
+        const int c[8] = {id(i, j, k),         id(i + 1, j, k),        id(i, j + 1, k),
+                          id(i + 1, j + 1, k), id(i, j, k + 1),        id(i + 1, j, k + 1),
                           id(i, j + 1, k + 1), id(i + 1, j + 1, k + 1)};
         // Five tetrahedra per cube.
         def.clusters.clusters.push_back({c[0], c[1], c[2], c[4]});

@@ -24,11 +24,21 @@ Eigen::MatrixX3d startPositions(const std::vector<Vec3>& rest, Start start, unsi
   Eigen::MatrixX3d x = toMatrix(rest);
   for (int i = 0; i < x.rows(); ++i) {
     switch (start) {
-      case Start::Random: x.row(i) = Eigen::RowVector3d(u(rng), u(rng), u(rng)); break;
-      case Start::Inverted: x(i, 0) = -x(i, 0); break;  // mirrored: det < 0
-      case Start::Flat: x(i, 2) = 0.0; break;
-      case Start::Line: x(i, 1) = 0.0, x(i, 2) = 0.0; break;
-      case Start::Point: x.row(i).setZero(); break;
+      case Start::Random:
+        x.row(i) = Eigen::RowVector3d(u(rng), u(rng), u(rng));
+        break;
+      case Start::Inverted:
+        x(i, 0) = -x(i, 0);
+        break;  // mirrored: det < 0
+      case Start::Flat:
+        x(i, 2) = 0.0;
+        break;
+      case Start::Line:
+        x(i, 1) = 0.0, x(i, 2) = 0.0;
+        break;
+      case Start::Point:
+        x.row(i).setZero();
+        break;
     }
   }
   return x;
@@ -74,13 +84,14 @@ TEST_P(Stability, BoundedForEveryStepAlphaAndStart) {
         const double reach = 3.0 * (2.0 * std::sqrt(3.0) + std::sqrt(3.0));
         // A further ×10 leaves room for the energy that moving goals exchange with the body
         // (observed up to ×2.5); instability shows as growth by many orders of magnitude.
-        const double bound = 10.0 * 0.5 * world.mass(b) * 2.5 * std::max(alpha, 0.05) * std::pow(reach / h, 2);
+        const double bound =
+            10.0 * 0.5 * world.mass(b) * 2.5 * std::max(alpha, 0.05) * std::pow(reach / h, 2);
         double maxEnergy = 0;
         for (int s = 0; s < 10000; ++s) {
           world.step(h);
           const double e = kineticEnergy(world, b);
-          ASSERT_TRUE(std::isfinite(e)) << "alpha " << alpha << " h " << h << " start "
-                                        << int(start) << " step " << s;
+          ASSERT_TRUE(std::isfinite(e))
+              << "alpha " << alpha << " h " << h << " start " << int(start) << " step " << s;
           maxEnergy = std::max(maxEnergy, e);
         }
         EXPECT_LE(maxEnergy, bound) << "alpha " << alpha << " h " << h << " start " << int(start);
@@ -102,8 +113,10 @@ INSTANTIATE_TEST_SUITE_P(AllModes, Stability,
                                            StabilityCase{Mode::Quadratic, true}),
                          [](const auto& caseInfo) {
                            const auto& p = caseInfo.param;
-                           return std::string(modeName(p.mode)) + (p.clustered ? "_clusters" : "_single") +
-                                  (p.mode == Mode::Linear ? (p.preserveVolume ? "_volume" : "_free") : "");
+                           return std::string(modeName(p.mode)) +
+                                  (p.clustered ? "_clusters" : "_single") +
+                                  (p.mode == Mode::Linear ? (p.preserveVolume ? "_volume" : "_free")
+                                                          : "");
                          });
 
 // The weaker guarantee that holds for every β with volume restoration: no NaN, no reset, and
@@ -156,7 +169,7 @@ TEST_P(Momentum, ConservedWithoutExternalForces) {
   Eigen::MatrixX3d x = toMatrix(def.positions), v(x.rows(), 3);
   for (int i = 0; i < x.rows(); ++i) {
     x.row(i) += 0.2 * Eigen::RowVector3d(u(rng), u(rng), u(rng));  // deformed start
-    v.row(i) = Eigen::RowVector3d(1.0 + u(rng), u(rng), u(rng));  // drifting and deforming
+    v.row(i) = Eigen::RowVector3d(1.0 + u(rng), u(rng), u(rng));   // drifting and deforming
   }
   world.setState(b, x, v);
   const Vec3 p0 = world.linearMomentum(b);
@@ -177,23 +190,22 @@ TEST_P(Momentum, ConservedWithoutExternalForces) {
   EXPECT_GT((toDouble(world.positions(b)) - x).norm(), 0.1);
 }
 
-INSTANTIATE_TEST_SUITE_P(AllModes, Momentum,
-                         ::testing::Values(StabilityCase{Mode::Rigid, false},
-                                           StabilityCase{Mode::Linear, false},
-                                           StabilityCase{Mode::Quadratic, false},
-                                           StabilityCase{Mode::Rigid, true},
-                                           StabilityCase{Mode::Linear, true},
-                                           StabilityCase{Mode::Quadratic, true}),
-                         [](const auto& caseInfo) {
-                           return std::string(modeName(caseInfo.param.mode)) +
-                                  (caseInfo.param.clustered ? "_clusters" : "_single");
-                         });
+INSTANTIATE_TEST_SUITE_P(
+    AllModes, Momentum,
+    ::testing::Values(StabilityCase{Mode::Rigid, false}, StabilityCase{Mode::Linear, false},
+                      StabilityCase{Mode::Quadratic, false}, StabilityCase{Mode::Rigid, true},
+                      StabilityCase{Mode::Linear, true}, StabilityCase{Mode::Quadratic, true}),
+    [](const auto& caseInfo) {
+      return std::string(modeName(caseInfo.param.mode)) +
+             (caseInfo.param.clustered ? "_clusters" : "_single");
+    });
 
 double maxDistanceError(const Eigen::MatrixX3d& a, const Eigen::MatrixX3d& b) {
   double worst = 0;
   for (int i = 0; i < a.rows(); ++i)
     for (int j = i + 1; j < a.rows(); ++j)
-      worst = std::max(worst, std::abs((a.row(i) - a.row(j)).norm() - (b.row(i) - b.row(j)).norm()));
+      worst =
+          std::max(worst, std::abs((a.row(i) - a.row(j)).norm() - (b.row(i) - b.row(j)).norm()));
   return worst;
 }
 
@@ -239,7 +251,8 @@ TEST(Damping, LeavesRigidMotionUntouched) {
   const BodyHandle b = world.addBody(def);
   Eigen::MatrixX3d x = toMatrix(def.positions), v(x.rows(), 3);
   const Vec3 omega(0.3, 1.0, -0.2), vel(0.5, 0, 0);
-  for (int i = 0; i < x.rows(); ++i) v.row(i) = (vel + omega.cross(Vec3(x.row(i).transpose()))).transpose();
+  for (int i = 0; i < x.rows(); ++i)
+    v.row(i) = (vel + omega.cross(Vec3(x.row(i).transpose()))).transpose();
   world.setState(b, x, v);
   const Vec3 p0 = world.linearMomentum(b), L0 = world.angularMomentum(b);
   const Vec3 c0 = world.centreOfMass(b);
@@ -299,7 +312,8 @@ TEST(Colliders, EachTypeStopsAFallingBody) {
     EXPECT_GT(lowest, -1e-4) << colliderShapeName(c.shape);  // never inside after a step
     EXPECT_GT(world.centreOfMass(b).y(), 0.0) << colliderShapeName(c.shape);  // resting on top
     // The fall (≈ 6 m/s at impact) has been stopped.
-    EXPECT_LT(std::abs(world.linearMomentum(b).y()), 0.1 * world.mass(b)) << colliderShapeName(c.shape);
+    EXPECT_LT(std::abs(world.linearMomentum(b).y()), 0.1 * world.mass(b))
+        << colliderShapeName(c.shape);
   }
 }
 
@@ -319,7 +333,7 @@ TEST(Colliders, FrictionStopsSliding) {
     return world.centreOfMass(b).x();
   };
   const double free = slide(0.0), sticky = slide(1.0);
-  EXPECT_GT(free, 3.5);        // 2 s at 2 m/s
+  EXPECT_GT(free, 3.5);  // 2 s at 2 m/s
   EXPECT_LT(sticky, 0.5 * free);
 }
 
@@ -335,7 +349,8 @@ TEST(Pinned, PinnedParticlesStayAndBodyHangs) {
   const BodyHandle b = world.addBody(def);
   for (int s = 0; s < 200; ++s) world.step();
   const Eigen::MatrixX3d x = toDouble(world.positions(b));
-  for (int p : def.pinned) EXPECT_LT((x.row(p).transpose() - def.positions[size_t(p)]).norm(), 1e-6);
+  for (int p : def.pinned)
+    EXPECT_LT((x.row(p).transpose() - def.positions[size_t(p)]).norm(), 1e-6);
   EXPECT_TRUE(x.allFinite());
   EXPECT_GT(world.centreOfMass(b).y(), 0.0);  // held up, did not fall away
 }

@@ -12,12 +12,15 @@ using test::jitteredGrid;
 using test::noGravity;
 using test::toMatrix;
 
-PlasticityParams params(double yield, double creep, double max) { return {yield, creep, max}; }
+PlasticityParams params(double yield, double creep, double max) {
+  return {yield, creep, max};
+}
 
 TEST(Plasticity, NoChangeBelowYield) {
   Mat3 Sp = Mat3::Identity();
   const Mat3 S = Vec3(1.05, 0.97, 0.98).asDiagonal();  // ‖S − I‖₂ = 0.05
-  for (int i = 0; i < 1000; ++i) EXPECT_FALSE(updatePlasticDeformation(S, 0.01, params(0.06, 5.0, 0.5), Sp));
+  for (int i = 0; i < 1000; ++i)
+    EXPECT_FALSE(updatePlasticDeformation(S, 0.01, params(0.06, 5.0, 0.5), Sp));
   EXPECT_EQ(Sp, Mat3::Identity());
   EXPECT_TRUE(updatePlasticDeformation(S, 0.01, params(0.04, 5.0, 0.5), Sp));
 }
@@ -48,17 +51,19 @@ TEST(Plasticity, SameTotalCreepForHalfTheStep) {
   }
   std::vector<int> members(static_cast<size_t>(n));
   for (int i = 0; i < n; ++i) members[size_t(i)] = i;
-  const ClusterRestModel model =
-      buildClusterRest(members.data(), n, r.col(0).data(), r.col(1).data(), r.col(2).data(), w.data());
+  const ClusterRestModel model = buildClusterRest(members.data(), n, r.col(0).data(),
+                                                  r.col(1).data(), r.col(2).data(), w.data());
   ParticleColumns cols{{x.col(0).data(), x.col(1).data(), x.col(2).data()},
-                       {r.col(0).data(), r.col(1).data(), r.col(2).data()}, w.data()};
+                       {r.col(0).data(), r.col(1).data(), r.col(2).data()},
+                       w.data()};
   auto creep = [&](double h) {
     Mat3 Sp = Mat3::Identity();
     Eigen::Quaterniond rot = Eigen::Quaterniond::Identity();
     const int steps = static_cast<int>(std::lround(1.0 / h));
     for (int s = 0; s < steps; ++s) {
       const ClusterShape shape = deriveClusterShape(model, Sp, false);
-      const ClusterMoments m = accumulateMoments(cols, nullptr, 0, n, Eigen::Vector3f::Zero(), model.centre, false);
+      const ClusterMoments m =
+          accumulateMoments(cols, nullptr, 0, n, Eigen::Vector3f::Zero(), model.centre, false);
       const ClusterFit fit = fitCluster(m, Eigen::Vector3f::Zero(), model, shape, Sp, rot);
       rot = fit.rotation;
       const Mat3 S = fit.rotation.matrix().transpose() * fit.linear;
@@ -98,7 +103,8 @@ TEST(Plasticity, SustainedDeformationLeavesAPermanentChange) {
     for (int s = 0; s < 1500; ++s) world.step();  // released: settles to the new rest shape
     const Eigen::MatrixX3d x = world.positions(b).cast<double>();
     const Eigen::RowVector3d extent = x.colwise().maxCoeff() - x.colwise().minCoeff();
-    const Eigen::RowVector3d restExtent = toMatrix(def.positions).colwise().maxCoeff() - toMatrix(def.positions).colwise().minCoeff();
+    const Eigen::RowVector3d restExtent =
+        toMatrix(def.positions).colwise().maxCoeff() - toMatrix(def.positions).colwise().minCoeff();
     if (mode != Mode::Rigid) {
       // Still flatter than the original (in the rotated frame the flattest extent is smaller).
       EXPECT_LT(extent.minCoeff(), 0.95 * restExtent.minCoeff()) << modeName(mode);

@@ -53,8 +53,8 @@ TEST(Rotation, InvertedGivesProperRotationNotReflection) {
     Mat3 A = R0 * Vec3(1.0, 1.5, 0.7).asDiagonal();
     A.col(k % 3) *= -1.0;  // det A < 0
     ASSERT_LT(A.determinant(), 0.0);
-    for (const Eigen::Quaterniond& warm :
-         {Eigen::Quaterniond::Identity(), Eigen::Quaterniond(R0), Eigen::Quaterniond(test::randomRotation(rng))}) {
+    for (const Eigen::Quaterniond& warm : {Eigen::Quaterniond::Identity(), Eigen::Quaterniond(R0),
+                                           Eigen::Quaterniond(test::randomRotation(rng))}) {
       const Mat3 R = closestRotation(A, warm).matrix();
       expectProperRotation(R);
       expectClosest(R, A);
@@ -79,7 +79,7 @@ TEST(Rotation, DegenerateInputs) {
     const Vec3 a(g(rng), g(rng), g(rng)), b(g(rng), g(rng), g(rng)), c(g(rng), g(rng), g(rng)),
         d(g(rng), g(rng), g(rng));
     const Mat3 planar = a * b.transpose() + c * d.transpose();  // rank 2
-    const Mat3 collinear = a * b.transpose();                    // rank 1
+    const Mat3 collinear = a * b.transpose();                   // rank 1
     const Eigen::Quaterniond warm(test::randomRotation(rng));
     for (const Mat3& A : {planar, collinear, Mat3(-planar), Mat3(-collinear)}) {
       const Mat3 R = closestRotation(A, warm).matrix();
@@ -112,7 +112,8 @@ TEST(Rotation, VerifierRejectsWrongAnswers) {
   const Mat3 A = Vec3(1.0, 2.0, 3.0).asDiagonal();
   EXPECT_TRUE(isClosestRotation(Mat3::Identity(), A, 1e-9));
   EXPECT_FALSE(isClosestRotation(Mat3(Vec3(-1, -1, 1).asDiagonal()), A, 1e-9));  // saddle
-  EXPECT_FALSE(isClosestRotation(Eigen::AngleAxisd(0.1, Vec3::UnitZ()).toRotationMatrix(), A, 1e-9));
+  EXPECT_FALSE(
+      isClosestRotation(Eigen::AngleAxisd(0.1, Vec3::UnitZ()).toRotationMatrix(), A, 1e-9));
 }
 
 }  // namespace

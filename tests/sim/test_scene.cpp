@@ -15,7 +15,8 @@ namespace fs = std::filesystem;
 const std::string kAssets = SOFTBODY_ASSET_DIR;
 
 std::string body(const std::string& extra) {
-  return R"({"bodies": [{"name": "b", "mesh": ")" + kAssets + R"(/meshes/suzanne_cage.obj")" + extra + "}]}";
+  return R"({"bodies": [{"name": "b", "mesh": ")" + kAssets + R"(/meshes/suzanne_cage.obj")" +
+         extra + "}]}";
 }
 
 void expectSceneError(const std::string& json, const std::string& needle) {
@@ -42,8 +43,10 @@ TEST(Scene, DefaultSceneLoadsWithBoundRenderMeshes) {
     const cage::TriangleMesh mesh = cage::readMesh(kAssets + "/scenes/" + b.render->path);
     ASSERT_EQ(v.rows(), int(mesh.vertices.size()));
     const Vec3 r = b.rotationDegrees * (M_PI / 180.0);
-    const Mat3 R = (Eigen::AngleAxisd(r.z(), Vec3::UnitZ()) * Eigen::AngleAxisd(r.y(), Vec3::UnitY()) *
-                    Eigen::AngleAxisd(r.x(), Vec3::UnitX())).toRotationMatrix();
+    const Mat3 R =
+        (Eigen::AngleAxisd(r.z(), Vec3::UnitZ()) * Eigen::AngleAxisd(r.y(), Vec3::UnitY()) *
+         Eigen::AngleAxisd(r.x(), Vec3::UnitX()))
+            .toRotationMatrix();
     double worst = 0;
     for (size_t k = 0; k < mesh.vertices.size(); ++k) {
       const Vec3 expected = R * (b.scale * mesh.vertices[k]) + b.translation;
@@ -59,21 +62,25 @@ TEST(Scene, ErrorsNameFileFieldAndReason) {
   expectSceneError("{}", "bodies: is required");
   expectSceneError(R"({"bodies": [], "wrld": {}})", "wrld: unknown field");
   expectSceneError(body(R"(, "alpha": 3)"), "bodies[0].alpha: must be in [0, 1], got 3");
-  expectSceneError(body(R"(, "mode": "jelly")"), "bodies[0].mode: must be rigid, linear or quadratic");
-  expectSceneError(body(R"(, "translation": [1, 2])"), "bodies[0].translation: must be an array of 3 numbers");
-  expectSceneError(body(R"(, "clusters": {"kind": "grid", "cellSize": -1})"), "bodies[0].clusters.cellSize");
+  expectSceneError(body(R"(, "mode": "jelly")"),
+                   "bodies[0].mode: must be rigid, linear or quadratic");
+  expectSceneError(body(R"(, "translation": [1, 2])"),
+                   "bodies[0].translation: must be an array of 3 numbers");
+  expectSceneError(body(R"(, "clusters": {"kind": "grid", "cellSize": -1})"),
+                   "bodies[0].clusters.cellSize");
   expectSceneError(body(R"(, "clusters": {"kind": "explicit", "clusters": [[0, 1, 999]]})"),
                    "bodies[0]: clusters.clusters[0]: particle index out of range");
-  expectSceneError(body(R"(, "plasticity": {"yeild": 1})"), "bodies[0].plasticity.yeild: unknown field");
-  expectSceneError(R"({"world": {"substeps": 0}, "bodies": []})", "world.substeps: must be in [1, 1000]");
+  expectSceneError(body(R"(, "plasticity": {"yeild": 1})"),
+                   "bodies[0].plasticity.yeild: unknown field");
+  expectSceneError(R"({"world": {"substeps": 0}, "bodies": []})",
+                   "world.substeps: must be in [1, 1000]");
   expectSceneError(R"({"colliders": [{"type": "cone"}], "bodies": []})", "colliders[0].type");
-  expectSceneError(R"({"bodies": [{"mesh": "/no/such/mesh.obj"}]})", "bodies[0].mesh: /no/such/mesh.obj");
+  expectSceneError(R"({"bodies": [{"mesh": "/no/such/mesh.obj"}]})",
+                   "bodies[0].mesh: /no/such/mesh.obj");
   // A render mesh needs a valid closed cage; a mesh with no faces cannot be one.
   const fs::path dir = fs::temp_directory_path() / "softbody_scene_test";
   fs::create_directories(dir);
-  {
-    std::ofstream(dir / "points.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n";
-  }
+  { std::ofstream(dir / "points.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"; }
   expectSceneError(R"({"bodies": [{"mesh": ")" + (dir / "points.obj").string() +
                        R"(", "renderMesh": ")" + kAssets + R"(/meshes/suzanne.obj"}]})",
                    "bodies[0].mesh: cannot bind the render mesh");
@@ -102,11 +109,18 @@ TEST(Scene, SaveRoundTripsParametersAtomically) {
   EXPECT_DOUBLE_EQ(q.alpha, 0.123);
   EXPECT_DOUBLE_EQ(q.plasticity.creep, 0.7);
   EXPECT_EQ(back.world.settings().substeps, 7);
-  EXPECT_EQ(back.world.clusterCount(back.bodies[1].handle), scene.world.clusterCount(scene.bodies[1].handle));
+  EXPECT_EQ(back.world.clusterCount(back.bodies[1].handle),
+            scene.world.clusterCount(scene.bodies[1].handle));
   // A failed save leaves the existing file as it was.
-  const std::string before = [&] { std::ifstream in(path); return std::string(std::istreambuf_iterator<char>(in), {}); }();
+  const std::string before = [&] {
+    std::ifstream in(path);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  }();
   EXPECT_THROW(saveScene(scene, (dir / "no_such_dir" / "x.json").string()), SceneError);
-  const std::string after = [&] { std::ifstream in(path); return std::string(std::istreambuf_iterator<char>(in), {}); }();
+  const std::string after = [&] {
+    std::ifstream in(path);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  }();
   EXPECT_EQ(before, after);
 }
 
@@ -115,7 +129,8 @@ TEST(Scene, MissingFileIsAClearError) {
     loadScene("/definitely/not/here.json");
     FAIL();
   } catch (const SceneError& e) {
-    EXPECT_NE(std::string(e.what()).find("/definitely/not/here.json: cannot open"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("/definitely/not/here.json: cannot open"),
+              std::string::npos);
   }
 }
 

@@ -45,7 +45,8 @@ BodyDef gridBody(Mode mode, bool clustered) {
 }
 
 double relError(const Eigen::MatrixX3d& a, const Eigen::MatrixX3d& b) {
-  return (a - b).rowwise().norm().maxCoeff() / (b.colwise().maxCoeff() - b.colwise().minCoeff()).norm();
+  return (a - b).rowwise().norm().maxCoeff() /
+         (b.colwise().maxCoeff() - b.colwise().minCoeff()).norm();
 }
 
 TEST(ShapeMatching, LinearWithBetaZeroEqualsRigid) {
@@ -91,7 +92,8 @@ TEST(ShapeMatching, VolumePreservingLinearNormalisesDeterminant) {
     const Mat3 A = std::cbrt(det) * R * shear;
     x = applyAffine(def.positions, A, Vec3::Zero());
     Eigen::MatrixX3d expected = applyAffine(def.positions, A / divisor, Vec3::Zero());
-    const Eigen::RowVector3d shift = x.colwise().mean() - expected.colwise().mean();  // equal masses
+    const Eigen::RowVector3d shift =
+        x.colwise().mean() - expected.colwise().mean();  // equal masses
     expected.rowwise() += shift;
     EXPECT_LT(relError(goalsFor(def, x), expected), 2e-6) << det;
   }
@@ -110,7 +112,8 @@ TEST(ShapeMatching, QuadraticReproducesAnyQuadraticMap) {
       const BodyDef def = gridBody(Mode::Quadratic, clustered);
       Eigen::MatrixX3d x(static_cast<int>(def.positions.size()), 3);
       for (size_t i = 0; i < def.positions.size(); ++i)
-        x.row(int(i)) = (A * def.positions[i] + Q * monomials<double>(def.positions[i]) + t).transpose();
+        x.row(int(i)) =
+            (A * def.positions[i] + Q * monomials<double>(def.positions[i]) + t).transpose();
       EXPECT_LT(relError(goalsFor(def, x), x), 2e-5) << "clustered " << clustered << " k " << k;
       // Linear mode cannot: the bend is really there.
       EXPECT_GT(relError(goalsFor(gridBody(Mode::Linear, clustered), x), x), 1e-3);
@@ -144,7 +147,8 @@ TEST(ClusterRest, MonomialMapTransformsQuadraticTerms) {
     Mat3 S;
     for (int i = 0; i < 9; ++i) S(i / 3, i % 3) = g(rng);
     const Vec3 q(g(rng), g(rng), g(rng));
-    EXPECT_LT((monomialMap(S) * monomials<double>(q) - monomials<double>(Vec3(S * q))).norm(), 1e-12 * (1 + (S * q).squaredNorm()));
+    EXPECT_LT((monomialMap(S) * monomials<double>(q) - monomials<double>(Vec3(S * q))).norm(),
+              1e-12 * (1 + (S * q).squaredNorm()));
   }
 }
 

@@ -18,7 +18,8 @@ inline std::vector<Vec3> jitteredGrid(int n, double size, const Vec3& centre, un
   for (int k = 0; k < n; ++k)
     for (int j = 0; j < n; ++j)
       for (int i = 0; i < n; ++i)
-        out.push_back(centre + step * Vec3(i + jitter(rng) - 0.5 * (n - 1), j + jitter(rng) - 0.5 * (n - 1),
+        out.push_back(centre + step * Vec3(i + jitter(rng) - 0.5 * (n - 1),
+                                           j + jitter(rng) - 0.5 * (n - 1),
                                            k + jitter(rng) - 0.5 * (n - 1)));
   return out;
 }
@@ -36,7 +37,9 @@ inline Eigen::MatrixX3d toMatrix(const std::vector<Vec3>& v) {
   return m;
 }
 
-inline Eigen::MatrixX3d toDouble(const ConstPointsRef& p) { return p.cast<double>(); }
+inline Eigen::MatrixX3d toDouble(const ConstPointsRef& p) {
+  return p.cast<double>();
+}
 
 inline double kineticEnergy(const World& w, BodyHandle b) {
   const Eigen::VectorXf m = w.masses(b);
