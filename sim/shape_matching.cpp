@@ -26,15 +26,18 @@ ClusterMoments accumulate(const ParticleColumns& p, const int* members, int begi
   const float *px = p.x[0], *py = p.x[1], *pz = p.x[2];
   const float *rx = p.r[0], *ry = p.r[1], *rz = p.r[2];
   const float* pw = p.w;
+  const float *mqx = p.memberQ[0], *mqy = p.memberQ[1], *mqz = p.memberQ[2], *mw = p.memberW;
 
   for (int blockBegin = begin; blockBegin < end; blockBegin += kBlock) {
     const int blockEnd = std::min(end, blockBegin + kBlock);
     alignas(32) float acc[kCount][kLanes] = {};
     auto addMember = [&](int k, int lane) {
       const int i = kGather ? members[k] : k;
-      const float w = pw[i];
+      const float w = kGather ? mw[k] : pw[i];
       const float dx = px[i] - refx, dy = py[i] - refy, dz = pz[i] - refz;
-      const float qx = rx[i] - rcx, qy = ry[i] - rcy, qz = rz[i] - rcz;
+      const float qx = kGather ? mqx[k] : rx[i] - rcx;
+      const float qy = kGather ? mqy[k] : ry[i] - rcy;
+      const float qz = kGather ? mqz[k] : rz[i] - rcz;
       const float wdx = w * dx, wdy = w * dy, wdz = w * dz;
       acc[0][lane] += wdx;
       acc[1][lane] += wdy;

@@ -26,9 +26,14 @@ struct ClusterMoments {
 
 // Where a kernel reads particle data: column pointers of #P-long float arrays.
 struct ParticleColumns {
-  const float* x[3];  // current positions (m)
-  const float* r[3];  // rest positions in the body frame (m)
-  const float* w;     // matching weights (kg)
+  const float* x[3];  // current positions (m), indexed by particle
+  const float* r[3];  // rest positions in the body frame (m), indexed by particle
+  const float* w;     // matching weights (kg), indexed by particle
+  // Optional, indexed by membership k (parallel to `members`): the rest offset q⁰ = r − rc and the
+  // weight of members[k], evaluated exactly as from r, rc and w. Streaming them instead of
+  // gathering r and w leaves only x to gather in clusters that are not the whole body.
+  const float* memberQ[3] = {nullptr, nullptr, nullptr};
+  const float* memberW = nullptr;
 };
 
 // Accumulates members [begin, end) of a cluster: particle k is members[k], or k itself when

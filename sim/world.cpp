@@ -75,6 +75,9 @@ struct BodyModel {
   Eigen::VectorXf matchWeight;  // wᵢ = mᵢ / (number of clusters of i): conserves momentum
   Eigen::VectorXf invCount;     // 1 / (number of clusters of i)
   std::vector<ClusterRestModel> clusterRest;
+  // Per membership (parallel to `members`): q⁰ = r − rc (#M×3) and the member's weight.
+  MatX3f memberRest;
+  Eigen::VectorXf memberWeight;
   std::vector<MomentTask> tasks;  // in cluster order
   std::vector<int> taskStart;     // tasks of cluster c: taskStart[c] .. taskStart[c+1]
   bool wholeBodyCluster = false;  // exactly one cluster holding every particle in order
@@ -90,6 +93,10 @@ struct BodyState {
   std::vector<Eigen::Quaterniond> rotation;  // warm start of the rotation extraction
   std::vector<Eigen::Vector3f> ref;          // last centre of mass: reference for float sums
   std::vector<GoalTransform> goal;           // per cluster, written by the Goals phase
+  // The linear part of each goal packed as rows [L | t] (12 floats, SIMD-aligned): the
+  // per-membership sum in the integration of clustered bodies is three vector adds.
+  std::vector<Eigen::Matrix<float, 12, 1>, Eigen::aligned_allocator<Eigen::Matrix<float, 12, 1>>>
+      goalRows;
 };
 
 struct BodySlot {
@@ -171,7 +178,25 @@ std::shared_ptr<BodyModel> buildModel(const BodyDef& def, const ClusterDef& clus
       m->tasks.push_back({c, k, std::min(e, k + kMembersPerTask)});
     m->taskStart.push_back(static_cast<int>(m->tasks.size()));
   }
+  const int memberCount = static_cast<int>(m->members.size());
+  m->memberRest.resize(memberCount, 3);
+  m->memberWeight.resize(memberCount);
+  for (int c = 0; c < nc; ++c) {
+    const Eigen::Vector3f rc = m->clusterRest[size_t(c)].centre;
+    for (int k = m->memberStart[size_t(c)]; k < m->memberStart[size_t(c) + 1]; ++k) {
+      const int i = m->members[size_t(k)];
+      for (int a = 0; a < 3; ++a) m->memberRest(k, a) = m->rest(i, a) - rc[a];  // as the kernels do
+      m->memberWeight[k] = m->matchWeight[i];
+    }
+  }
   return m;
+}
+
+void packGoalRows(const GoalTransform& T, Eigen::Matrix<float, 12, 1>& rows) {
+  for (int a = 0; a < 3; ++a) {
+    for (int j = 0; j < 3; ++j) rows[4 * a + j] = T.L(a, j);
+    rows[4 * a + 3] = T.t[a];
+  }
 }
 
 // Cluster state for the current positions: identity plastic state, goals = rest shape placed at
@@ -183,6 +208,7 @@ void resetClusterState(const BodyModel& m, BodyState& s) {
   s.rotation.assign(nc, Eigen::Quaterniond::Identity());
   s.ref.resize(nc);
   s.goal.assign(nc, GoalTransform{});
+  s.goalRows.resize(nc);
   for (size_t c = 0; c < nc; ++c) {
     s.shape[c] = deriveClusterShape(m.clusterRest[c], Mat3::Identity(), false);
     Vec3 centre = Vec3::Zero();
@@ -195,6 +221,7 @@ void resetClusterState(const BodyModel& m, BodyState& s) {
     s.ref[c] = (centre / mass).cast<float>();
     s.goal[c].L.setIdentity();
     s.goal[c].t = m.origin.cast<float>();
+    packGoalRows(s.goal[c], s.goalRows[c]);
   }
 }
 
@@ -320,6 +347,10 @@ void World::Data::computeGoals(double h, std::vector<char>& badBodies, StepProfi
         {b.state.x.col(0).data(), b.state.x.col(1).data(), b.state.x.col(2).data()},
         {m.rest.col(0).data(), m.rest.col(1).data(), m.rest.col(2).data()},
         m.matchWeight.data()};
+    if (!m.wholeBodyCluster) {
+      for (int a = 0; a < 3; ++a) cols.memberQ[a] = m.memberRest.col(a).data();
+      cols.memberW = m.memberWeight.data();
+    }
     const bool quadratic = b.params.mode == Mode::Quadratic;
     partial[size_t(i)] =
         m.wholeBodyCluster
@@ -368,6 +399,7 @@ void World::Data::computeGoals(double h, std::vector<char>& badBodies, StepProfi
         s.ref[c] = fit.centre.cast<float>();
         s.goal[c] =
             goalTransform(fit, sum, ref, m.clusterRest[c], s.shape[c], s.plastic[c], b.params);
+        packGoalRows(s.goal[c], s.goalRows[c]);
         if (!s.goal[c].L.allFinite() || !s.goal[c].Q.allFinite() || !s.goal[c].t.allFinite())
           clusterBad[size_t(i)] = 1;
       });
@@ -506,6 +538,18 @@ bool integrateBlock(const BodyModel& m, BodyState& s, const BodyParams& params, 
   const int* clusterOf = m.particleClusters.data();
   const float* invCount = m.invCount.data();
   const GoalTransform* goals = s.goal.data();
+  const Eigen::Matrix<float, 12, 1>* rows = s.goalRows.data();
+  if (!quadratic) {
+    return run([=](int i, float* g) {
+      // Average the goal transforms of the particle's clusters, then evaluate once.
+      Eigen::Matrix<float, 12, 1> sum = Eigen::Matrix<float, 12, 1>::Zero();
+      for (int k = start[i]; k < start[i + 1]; ++k) sum += rows[clusterOf[k]];
+      const float x = rx[i], y = ry[i], z = rz[i];
+      for (int a = 0; a < 3; ++a)
+        g[a] = (sum[4 * a] * x + sum[4 * a + 1] * y + sum[4 * a + 2] * z + sum[4 * a + 3]) *
+               invCount[i];
+    });
+  }
   return run([=](int i, float* g) {
     // Average the goal transforms of the particle's clusters, then evaluate once.
     Eigen::Matrix3f L = Eigen::Matrix3f::Zero();
