@@ -416,6 +416,27 @@ void World::Data::computeGoals(double h, std::vector<char>& badBodies, StepProfi
 
 namespace {
 
+// Müller's update of particle i toward goal g: v += α(g − x)/h + h·gravity, x += h·v, with
+// pull = α/h and (gvx, gvy, gvz) = h·gravity. Returns 1 if a non-finite value appeared: x − x is
+// 0 for finite x and NaN otherwise, and the test vectorises as an integer OR.
+[[gnu::always_inline]] inline int mullerUpdate(float* __restrict px, float* __restrict py,
+                                               float* __restrict pz, float* __restrict vx,
+                                               float* __restrict vy, float* __restrict vz, int i,
+                                               float g0, float g1, float g2, float hf, float pull,
+                                               float gvx, float gvy, float gvz) {
+  const float nvx = vx[i] + pull * (g0 - px[i]) + gvx;
+  const float nvy = vy[i] + pull * (g1 - py[i]) + gvy;
+  const float nvz = vz[i] + pull * (g2 - pz[i]) + gvz;
+  const float nx = px[i] + hf * nvx, ny = py[i] + hf * nvy, nz = pz[i] + hf * nvz;
+  vx[i] = nvx;
+  vy[i] = nvy;
+  vz[i] = nvz;
+  px[i] = nx;
+  py[i] = ny;
+  pz[i] = nz;
+  return ((nx - nx) + (ny - ny) + (nz - nz) + (nvx - nvx) + (nvy - nvy) + (nvz - nvz)) != 0.0f;
+}
+
 // v += α(g − x)/h + h·gravity ; x += h·v for particles [begin, end), with g from goal(i, g).
 // Plain restrict pointers and a goal functor taken by value keep this loop vectorised.
 // Returns non-zero if a non-finite value appeared.
@@ -427,18 +448,7 @@ int integrateRange(float* __restrict px, float* __restrict py, float* __restrict
   for (int i = begin; i < end; ++i) {
     float g[3];
     goal(i, g);
-    const float nvx = vx[i] + pull * (g[0] - px[i]) + gvx;
-    const float nvy = vy[i] + pull * (g[1] - py[i]) + gvy;
-    const float nvz = vz[i] + pull * (g[2] - pz[i]) + gvz;
-    const float nx = px[i] + hf * nvx, ny = py[i] + hf * nvy, nz = pz[i] + hf * nvz;
-    vx[i] = nvx;
-    vy[i] = nvy;
-    vz[i] = nvz;
-    px[i] = nx;
-    py[i] = ny;
-    pz[i] = nz;
-    // x − x is 0 for finite x and NaN otherwise; the comparison vectorises as an integer OR.
-    bad |= ((nx - nx) + (ny - ny) + (nz - nz) + (nvx - nvx) + (nvy - nvy) + (nvz - nvz)) != 0.0f;
+    bad |= mullerUpdate(px, py, pz, vx, vy, vz, i, g[0], g[1], g[2], hf, pull, gvx, gvy, gvz);
   }
   return bad;
 }
@@ -460,17 +470,7 @@ int integrateLinearRange(float* __restrict px, float* __restrict py, float* __re
     const float g0 = L00 * x + L01 * y + L02 * z + tx;
     const float g1 = L10 * x + L11 * y + L12 * z + ty;
     const float g2 = L20 * x + L21 * y + L22 * z + tz;
-    const float nvx = vx[i] + pull * (g0 - px[i]) + gvx;
-    const float nvy = vy[i] + pull * (g1 - py[i]) + gvy;
-    const float nvz = vz[i] + pull * (g2 - pz[i]) + gvz;
-    const float nx = px[i] + hf * nvx, ny = py[i] + hf * nvy, nz = pz[i] + hf * nvz;
-    vx[i] = nvx;
-    vy[i] = nvy;
-    vz[i] = nvz;
-    px[i] = nx;
-    py[i] = ny;
-    pz[i] = nz;
-    bad |= ((nx - nx) + (ny - ny) + (nz - nz) + (nvx - nvx) + (nvy - nvy) + (nvz - nvz)) != 0.0f;
+    bad |= mullerUpdate(px, py, pz, vx, vy, vz, i, g0, g1, g2, hf, pull, gvx, gvy, gvz);
   }
   return bad;
 }
@@ -494,17 +494,7 @@ int integrateQuadraticRange(float* __restrict px, float* __restrict py, float* _
     for (int a = 0; a < 3; ++a)
       g[a] = C[a][0] * x + C[a][1] * y + C[a][2] * z + C[a][3] * xx + C[a][4] * yy + C[a][5] * zz +
              C[a][6] * xy + C[a][7] * yz + C[a][8] * zx + C[a][9];
-    const float nvx = vx[i] + pull * (g[0] - px[i]) + gvx;
-    const float nvy = vy[i] + pull * (g[1] - py[i]) + gvy;
-    const float nvz = vz[i] + pull * (g[2] - pz[i]) + gvz;
-    const float nx = px[i] + hf * nvx, ny = py[i] + hf * nvy, nz = pz[i] + hf * nvz;
-    vx[i] = nvx;
-    vy[i] = nvy;
-    vz[i] = nvz;
-    px[i] = nx;
-    py[i] = ny;
-    pz[i] = nz;
-    bad |= ((nx - nx) + (ny - ny) + (nz - nz) + (nvx - nvx) + (nvy - nvy) + (nvz - nvz)) != 0.0f;
+    bad |= mullerUpdate(px, py, pz, vx, vy, vz, i, g[0], g[1], g[2], hf, pull, gvx, gvy, gvz);
   }
   return bad;
 }
