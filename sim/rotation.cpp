@@ -91,9 +91,10 @@ Eigen::Quaterniond closestRotation(const Mat3& A, const Eigen::Quaterniond& warm
     const Mat3 H = Bs.trace() * Mat3::Identity() - Bs;
     Vec3 omega;
     if (solvePositiveDefinite(H, tau, 1e-9, &omega)) {
-      // H > 0 proves this is the basin of the maximum. A step this small leaves an error of
-      // about its square (quadratic convergence): take it and stop.
-      if (omega.squaredNorm() < 1e-14) return rotateBy(omega, q);
+      // H > 0 proves this is the basin of the maximum. Newton converges quadratically, so after
+      // a step of length below 1e-4 the error is ~1e-8 (below float precision of the positions
+      // it acts on): take the step and stop. From a warm start this is usually the first step.
+      if (omega.squaredNorm() < 1e-8) return rotateBy(omega, q);
       // Newton steps are only trusted locally; longer ones are clipped.
       const double len = omega.norm();
       if (len > 0.5) omega *= 0.5 / len;
