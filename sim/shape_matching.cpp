@@ -140,9 +140,8 @@ ClusterFit fitCluster(const ClusterMoments& m, const Eigen::Vector3f& ref,
 }
 
 GoalTransform goalTransform(const ClusterFit& fit, const ClusterMoments& m,
-                            const Eigen::Vector3f& /*ref*/, const ClusterRestModel& rest,
-                            const ClusterShape& shape, const Mat3& plastic,
-                            const BodyParams& params) {
+                            const ClusterRestModel& rest, const ClusterShape& shape,
+                            const Mat3& plastic, const BodyParams& params) {
   const Mat3 R = fit.rotation.matrix();
   const double beta = params.beta;
   Mat3 Tlin = R;                                                            // acts on q

@@ -69,8 +69,7 @@ ClusterFit fitCluster(const ClusterMoments& m, const Eigen::Vector3f& ref,
 // The goal transform for `mode` with blend β (linear/quadratic) and optional volume
 // preservation (linear). Falls back to the rotation when the linear fit is inverted or flat.
 GoalTransform goalTransform(const ClusterFit& fit, const ClusterMoments& m,
-                            const Eigen::Vector3f& ref, const ClusterRestModel& rest,
-                            const ClusterShape& shape, const Mat3& plastic,
-                            const BodyParams& params);
+                            const ClusterRestModel& rest, const ClusterShape& shape,
+                            const Mat3& plastic, const BodyParams& params);
 
 }  // namespace sb

@@ -397,8 +397,7 @@ void World::Data::computeGoals(double h, std::vector<char>& badBodies, StepProfi
         }
         s.rotation[c] = fit.rotation;
         s.ref[c] = fit.centre.cast<float>();
-        s.goal[c] =
-            goalTransform(fit, sum, ref, m.clusterRest[c], s.shape[c], s.plastic[c], b.params);
+        s.goal[c] = goalTransform(fit, sum, m.clusterRest[c], s.shape[c], s.plastic[c], b.params);
         packGoalRows(s.goal[c], s.goalRows[c]);
         if (!s.goal[c].L.allFinite() || !s.goal[c].Q.allFinite() || !s.goal[c].t.allFinite())
           clusterBad[size_t(i)] = 1;
