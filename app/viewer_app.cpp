@@ -20,7 +20,7 @@
 #include "render/ground_renderer.h"
 #include "render/mesh_buffer.h"
 #include "render/mesh_renderer.h"
-#include "render/smooth_normals.h"
+#include "sim/cage/normals.h"
 
 namespace sb::app {
 
@@ -44,12 +44,24 @@ glm::vec4 clusterColour(int index) {
   const float x = 1.0f - std::fabs(std::fmod(h6, 2.0f) - 1.0f);
   glm::vec3 rgb;
   switch (static_cast<int>(h6)) {
-    case 0: rgb = {1, x, 0}; break;
-    case 1: rgb = {x, 1, 0}; break;
-    case 2: rgb = {0, 1, x}; break;
-    case 3: rgb = {0, x, 1}; break;
-    case 4: rgb = {x, 0, 1}; break;
-    default: rgb = {1, 0, x}; break;
+    case 0:
+      rgb = {1, x, 0};
+      break;
+    case 1:
+      rgb = {x, 1, 0};
+      break;
+    case 2:
+      rgb = {0, 1, x};
+      break;
+    case 3:
+      rgb = {0, x, 1};
+      break;
+    case 4:
+      rgb = {x, 0, 1};
+      break;
+    default:
+      rgb = {1, 0, x};
+      break;
   }
   return glm::vec4(0.25f + 0.75f * rgb, 1.0f);
 }
@@ -98,7 +110,8 @@ bool ViewerApp::open(std::string* error) {
   glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
   glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
   glfwWindowHint(GLFW_RESIZABLE, GLFW_TRUE);
-  const std::string title = "softbody - " + (scene_.path.empty() ? std::string("scene") : scene_.path);
+  const std::string title =
+      "softbody - " + (scene_.path.empty() ? std::string("scene") : scene_.path);
   window_ = glfwCreateWindow(options_.width, options_.height, title.c_str(), nullptr, nullptr);
   if (!window_) {
     *error = "cannot create a " + std::to_string(options_.width) + "x" +
@@ -183,10 +196,17 @@ void ViewerApp::frameCamera() {
     Vec3 half = Vec3::Zero();
     const Vec3 centre = c.centre;
     switch (c.shape) {
-      case Collider::Shape::Plane: continue;
-      case Collider::Shape::Box: half = c.rotation.cwiseAbs() * c.halfExtents; break;
-      case Collider::Shape::Sphere: half = Vec3::Constant(c.radius); break;
-      case Collider::Shape::Capsule: half = c.axis.cwiseAbs() + Vec3::Constant(c.radius); break;
+      case Collider::Shape::Plane:
+        continue;
+      case Collider::Shape::Box:
+        half = c.rotation.cwiseAbs() * c.halfExtents;
+        break;
+      case Collider::Shape::Sphere:
+        half = Vec3::Constant(c.radius);
+        break;
+      case Collider::Shape::Capsule:
+        half = c.axis.cwiseAbs() + Vec3::Constant(c.radius);
+        break;
     }
     lo = glm::min(lo, toGlm(centre - half));
     hi = glm::max(hi, toGlm(centre + half));
@@ -254,9 +274,16 @@ void ViewerApp::updateMeshes() {
     BodyView& v = views_[i];
     scene_.renderVertices(static_cast<int>(i), v.vertices);
     const auto n = static_cast<std::size_t>(v.vertices.rows());
+    // The cage module's normals (area weighted, unit); a vertex no triangle uses gets +y so the
+    // shader never normalises a zero vector.
+    PointsRowMajor normals;
+    cage::computeVertexNormals(scene_.renderTriangles(static_cast<int>(i)), v.vertices, normals);
     v.normals.resize(n * 3);
-    render::computeSmoothNormals(v.vertices.data(), n, v.triangles.data(), v.triangles.size() / 3,
-                                 v.normals.data());
+    for (std::size_t k = 0; k < n; ++k) {
+      Eigen::RowVector3f nk = normals.row(static_cast<Eigen::Index>(k));
+      if (!(nk.squaredNorm() > 0.0f)) nk = Eigen::RowVector3f(0.0f, 1.0f, 0.0f);
+      for (int a = 0; a < 3; ++a) v.normals[3 * k + static_cast<std::size_t>(a)] = nk[a];
+    }
     if (n > 0) {
       const Eigen::RowVector3f lo = v.vertices.colwise().minCoeff();
       const Eigen::RowVector3f hi = v.vertices.colwise().maxCoeff();
@@ -286,7 +313,8 @@ void ViewerApp::drawColliders(render::DebugDraw& draw) {
       case Collider::Shape::Box: {
         glm::vec3 corner[8];
         for (int k = 0; k < 8; ++k) {
-          const Vec3 local((k & 1 ? 1 : -1) * c.halfExtents.x(), (k & 2 ? 1 : -1) * c.halfExtents.y(),
+          const Vec3 local((k & 1 ? 1 : -1) * c.halfExtents.x(),
+                           (k & 2 ? 1 : -1) * c.halfExtents.y(),
                            (k & 4 ? 1 : -1) * c.halfExtents.z());
           corner[k] = toGlm(c.centre + c.rotation * local);
         }
@@ -327,7 +355,8 @@ void ViewerApp::drawOverlays(render::DebugDraw& draw) {
     if (showCage_) {
       const glm::vec4 colour = glm::mix(v.colour, glm::vec4(1.0f), 0.5f);
       for (const auto& e : v.cageEdges)
-        if (e.first < x.rows() && e.second < x.rows()) draw.line(row(x, e.first), row(x, e.second), colour);
+        if (e.first < x.rows() && e.second < x.rows())
+          draw.line(row(x, e.first), row(x, e.second), colour);
     }
     if (showClusters_) {
       for (std::size_t c = 0; c < v.clusters.size(); ++c) {
@@ -335,7 +364,8 @@ void ViewerApp::drawOverlays(render::DebugDraw& draw) {
         glm::vec3 centre(0.0f);
         for (int p : v.clusters[c]) centre += row(x, p);
         centre /= std::max<float>(1.0f, static_cast<float>(v.clusters[c].size()));
-        for (int p : v.clusters[c]) draw.line(centre, row(x, p), glm::vec4(glm::vec3(colour), 0.55f));
+        for (int p : v.clusters[c])
+          draw.line(centre, row(x, p), glm::vec4(glm::vec3(colour), 0.55f));
         draw.point(centre, colour);
       }
     }
@@ -401,7 +431,8 @@ void ViewerApp::renderFrame() {
   // Closed, outward-oriented meshes: culling back faces halves llvmpipe's triangle work.
   if (cullBackFaces_) glEnable(GL_CULL_FACE);
   for (BodyView& v : views_) {
-    v.mesh->setVertices(v.vertices.data(), v.normals.data(), static_cast<std::size_t>(v.vertices.rows()));
+    v.mesh->setVertices(v.vertices.data(), v.normals.data(),
+                        static_cast<std::size_t>(v.vertices.rows()));
     if (!options_.hideBodies) meshRenderer_->draw(*v.mesh, v.colour);
   }
   glDisable(GL_CULL_FACE);
@@ -464,7 +495,8 @@ int ViewerApp::run() {
   while (!glfwWindowShouldClose(window_)) {
     const Clock::time_point frameStart = Clock::now();
     if (frame_ > 0) {
-      timings_.lastFrame = std::chrono::duration<double, std::milli>(frameStart - lastFrameStart).count();
+      timings_.lastFrame =
+          std::chrono::duration<double, std::milli>(frameStart - lastFrameStart).count();
       timings_.frameSum += timings_.lastFrame;
     }
     lastFrameStart = frameStart;
@@ -503,7 +535,8 @@ int ViewerApp::run() {
     if (framebufferWidth_ > 0 && framebufferHeight_ > 0) {
       renderFrame();
       if (!options_.hideUi) ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
-      if (!options_.screenshot.empty() && frame_ == screenshotFrame) takeScreenshot(options_.screenshot);
+      if (!options_.screenshot.empty() && frame_ == screenshotFrame)
+        takeScreenshot(options_.screenshot);
       if (!screenshotRequest_.empty()) {
         takeScreenshot(screenshotRequest_);
         screenshotRequest_.clear();
@@ -527,7 +560,8 @@ int ViewerApp::run() {
 
     if (!options_.statsPath.empty() && options_.statsEvery > 0 && frame_ % options_.statsEvery == 0)
       writeStats(options_.statsPath);
-    if (options_.frames > 0 && frame_ >= options_.frames) glfwSetWindowShouldClose(window_, GLFW_TRUE);
+    if (options_.frames > 0 && frame_ >= options_.frames)
+      glfwSetWindowShouldClose(window_, GLFW_TRUE);
 
     // The cap may change in the panel at any time.
     if (options_.fpsCap > 0.0) {

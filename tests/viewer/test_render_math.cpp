@@ -9,7 +9,6 @@
 
 #include "render/orbit_camera.h"
 #include "render/picking.h"
-#include "render/smooth_normals.h"
 
 namespace sb::render {
 namespace {
@@ -90,7 +89,8 @@ TEST(OrbitCamera, RayThroughProjectedPixelPassesThroughPoint) {
   camera.yaw = 0.7f;
   camera.pitch = 0.4f;
   const float w = 940, h = 720;
-  for (const glm::vec3& p : {glm::vec3(0.3f, 0.2f, -0.1f), glm::vec3(1, 0, 0), glm::vec3(-0.5f, 0.8f, 0.6f)}) {
+  for (const glm::vec3& p :
+       {glm::vec3(0.3f, 0.2f, -0.1f), glm::vec3(1, 0, 0), glm::vec3(-0.5f, 0.8f, 0.6f)}) {
     glm::vec2 pixel;
     ASSERT_TRUE(camera.project(p, w, h, &pixel));
     const Ray ray = camera.rayThroughPixel(pixel.x, pixel.y, w, h);
@@ -127,32 +127,6 @@ TEST(OrbitCamera, PanKeepsDistanceAndFrameFitsBox) {
     EXPECT_GE(pixel.y, 0.0f);
     EXPECT_LE(pixel.y, 720.0f);
   }
-}
-
-TEST(SmoothNormals, OutwardUnitNormalsOfATetrahedron) {
-  const std::vector<float> positions = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
-  // Outward (counter-clockwise seen from outside) faces.
-  const std::vector<std::int32_t> triangles = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3};
-  std::vector<float> normals(12);
-  computeSmoothNormals(positions.data(), 4, triangles.data(), 4, normals.data());
-  const glm::vec3 centroid(0.25f);
-  for (int i = 0; i < 4; ++i) {
-    const glm::vec3 n(normals[3 * i], normals[3 * i + 1], normals[3 * i + 2]);
-    const glm::vec3 p(positions[3 * i], positions[3 * i + 1], positions[3 * i + 2]);
-    EXPECT_NEAR(glm::length(n), 1.0f, 1e-6f);
-    EXPECT_GT(glm::dot(n, p - centroid), 0.0f) << "vertex " << i;
-  }
-  // Vertex 0 touches three axis-aligned faces of equal area: its normal is −(1,1,1)/√3.
-  EXPECT_NEAR(normals[0], -1.0f / std::sqrt(3.0f), 1e-6f);
-}
-
-TEST(SmoothNormals, IsolatedAndDegenerateVerticesGetAFiniteNormal) {
-  const std::vector<float> positions = {0, 0, 0, 1, 0, 0, 2, 0, 0, 5, 5, 5};
-  const std::vector<std::int32_t> triangles = {0, 1, 2};  // zero area; vertex 3 unused
-  std::vector<float> normals(12, -7.0f);
-  computeSmoothNormals(positions.data(), 4, triangles.data(), 1, normals.data());
-  for (float v : normals) EXPECT_TRUE(std::isfinite(v));
-  EXPECT_EQ(normals[10], 1.0f);
 }
 
 }  // namespace
