@@ -259,6 +259,7 @@ struct GlobalCluster {
 // The work lists of one step, rebuilt only when bodies or clusters change.
 struct WorkLayout {
   std::vector<GlobalTask> tasks;
+  std::vector<int> splitTasks;  // tasks of clusters with several tasks (summed in a first pass)
   std::vector<GlobalCluster> clusters;
   std::vector<ParticleBlock> blocks;
   long long members = 0, particles = 0;
@@ -337,9 +338,8 @@ void World::Data::computeGoals(double h, std::vector<char>& badBodies, StepProfi
   const std::vector<GlobalTask>& tasks = layout.tasks;
   const std::vector<GlobalCluster>& clusters = layout.clusters;
   partial.resize(tasks.size());
-  // Threads only pay off for large clusters; small worlds run serially (no fork/join cost).
-  const int minParallelTasks = layout.members >= kMinParallelWork ? 2 : INT32_MAX;
-  parallelFor(static_cast<int>(tasks.size()), minParallelTasks, [&](int i) {
+  // Moments of one task (a fixed range of one cluster's members).
+  auto taskMoments = [&](int i) {
     const BodySlot& b = slots[size_t(tasks[size_t(i)].slot)];
     const BodyModel& m = *b.model;
     const MomentTask& task = m.tasks[size_t(tasks[size_t(i)].task)];
@@ -352,15 +352,16 @@ void World::Data::computeGoals(double h, std::vector<char>& badBodies, StepProfi
       cols.memberW = m.memberWeight.data();
     }
     const bool quadratic = b.params.mode == Mode::Quadratic;
-    partial[size_t(i)] =
-        m.wholeBodyCluster
-            ? accumulateMoments(cols, nullptr, task.begin, task.end,
-                                b.state.ref[size_t(task.cluster)],
-                                m.clusterRest[size_t(task.cluster)].centre, quadratic)
-            : accumulateMoments(cols, m.members.data(), task.begin, task.end,
-                                b.state.ref[size_t(task.cluster)],
-                                m.clusterRest[size_t(task.cluster)].centre, quadratic);
-  });
+    return accumulateMoments(cols, m.wholeBodyCluster ? nullptr : m.members.data(), task.begin,
+                             task.end, b.state.ref[size_t(task.cluster)],
+                             m.clusterRest[size_t(task.cluster)].centre, quadratic);
+  };
+  // Large clusters are split into tasks summed first, in parallel; a cluster with one task is
+  // summed inside the per-cluster loop below (no second pass over its partial result).
+  const std::vector<int>& split = layout.splitTasks;
+  const int minParallelTasks = layout.members >= kMinParallelWork ? 2 : INT32_MAX;
+  parallelFor(static_cast<int>(split.size()), minParallelTasks,
+              [&](int k) { partial[size_t(split[size_t(k)])] = taskMoments(split[size_t(k)]); });
   // Per cluster: sum its tasks in order, fit, plastic flow, goal transform.
   plasticSeconds.assign(clusters.size(), 0.0);
   clusterBad.assign(clusters.size(), 0);
@@ -373,6 +374,7 @@ void World::Data::computeGoals(double h, std::vector<char>& badBodies, StepProfi
         const size_t c = size_t(gc.cluster);
         const int taskCount = m.taskStart[c + 1] - m.taskStart[c];
         ClusterMoments& sum = partial[size_t(gc.firstTask)];  // tasks of a cluster summed in order
+        if (taskCount == 1) sum = taskMoments(gc.firstTask);
         for (int t = 1; t < taskCount; ++t) sum += partial[size_t(gc.firstTask + t)];
         const Eigen::Vector3f ref = s.ref[c];
         const bool quadratic = b.params.mode == Mode::Quadratic;
@@ -661,8 +663,12 @@ void World::Data::rebuildLayout() {
     const BodyModel& m = *slots[size_t(s)].model;
     const int base = static_cast<int>(layout.tasks.size());
     for (int t = 0; t < static_cast<int>(m.tasks.size()); ++t) layout.tasks.push_back({s, t});
-    for (int c = 0; c < m.clusterCount(); ++c)
+    for (int c = 0; c < m.clusterCount(); ++c) {
       layout.clusters.push_back({s, c, base + m.taskStart[size_t(c)]});
+      if (m.taskStart[size_t(c) + 1] - m.taskStart[size_t(c)] > 1)
+        for (int t = m.taskStart[size_t(c)]; t < m.taskStart[size_t(c) + 1]; ++t)
+          layout.splitTasks.push_back(base + t);
+    }
     const int n = m.particleCount();
     for (int b = 0; b < n; b += kParticlesPerBlock)
       layout.blocks.push_back({s, b, std::min(n, b + kParticlesPerBlock)});
