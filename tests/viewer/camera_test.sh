@@ -5,11 +5,7 @@
 # usage: camera_test.sh SOFTBODY CHECK WORKDIR
 SOFTBODY=$1 CHECK=$2 WORK=$3
 source "$(dirname "$0")/common.sh"
-if [ "${INNER:-0}" != 1 ]; then
-  mkdir -p "$WORK"
-  rm -f "$WORK"/*.json
-  INNER=1 exec xvfb-run -a -s "$XVFB_SERVER_ARGS" bash "$0" "$@" </dev/null
-fi
+enter_xvfb "$@"
 live=$WORK/live.json
 "$SOFTBODY" ${SCENE_ARGS[@]+"${SCENE_ARGS[@]}"} --frames 100000 --paused --stats "$live" --stats-every 3 \
   >"$WORK/viewer.log" 2>&1 &

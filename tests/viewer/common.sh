@@ -6,6 +6,16 @@ XVFB_SERVER_ARGS="-screen 0 1280x720x24"
 SCENE_ARGS=()
 if [ -n "${VIEWER_TEST_SCENE:-}" ]; then SCENE_ARGS=("$VIEWER_TEST_SCENE"); fi
 
+# Re-runs the calling script (once) inside its own Xvfb display, with a clean work folder.
+# Call as `enter_xvfb "$@"` right after sourcing this file.
+enter_xvfb() {
+  if [ "${INNER:-0}" != 1 ]; then
+    mkdir -p "$WORK"
+    rm -f "$WORK"/*.json
+    INNER=1 exec xvfb-run -a -s "$XVFB_SERVER_ARGS" bash "$0" "$@" </dev/null
+  fi
+}
+
 fail() {
   echo "FAIL: $*" >&2
   exit 1

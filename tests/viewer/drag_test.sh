@@ -5,11 +5,7 @@
 # usage: drag_test.sh SOFTBODY CHECK WORKDIR
 SOFTBODY=$1 CHECK=$2 WORK=$3
 source "$(dirname "$0")/common.sh"
-if [ "${INNER:-0}" != 1 ]; then
-  mkdir -p "$WORK"
-  rm -f "$WORK"/*.json
-  INNER=1 exec xvfb-run -a -s "$XVFB_SERVER_ARGS" bash "$0" "$@" </dev/null
-fi
+enter_xvfb "$@"
 
 FRAMES=300
 start_viewer() {  # start_viewer STATS
