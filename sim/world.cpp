@@ -1,6 +1,7 @@
 #include "sim/world.h"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -828,6 +829,11 @@ void World::removeBody(BodyHandle h) {
   d_->layoutDirty = true;
   for (auto it = d_->drags.begin(); it != d_->drags.end();)
     it = it->second.body == h ? d_->drags.erase(it) : std::next(it);
+  // Forces queued for the removed body die with it (step() must not meet a stale handle).
+  auto& forces = d_->forces;
+  forces.erase(
+      std::remove_if(forces.begin(), forces.end(), [&](const Force& f) { return f.body == h; }),
+      forces.end());
 }
 
 bool World::contains(BodyHandle h) const {

@@ -70,8 +70,18 @@ TEST(WorldApi, HandlesBecomeInvalidWhenBodiesAreRemoved) {
   EXPECT_EQ(c.index, a.index);
   EXPECT_NE(c, a);
   EXPECT_THROW(world.positions(a), std::invalid_argument);
-  world.step();
+  // A force or drag queued for a body that is then removed is dropped with it.
+  world.addForce(b, 0, Vec3(1, 0, 0));
+  DragDef drag;
+  drag.body = b;
+  drag.particles = {0};
+  drag.weights = {1.0};
+  world.addDrag(drag);
+  world.removeBody(b);
+  EXPECT_NO_THROW(world.step());
+  const BodyHandle d = world.addBody(def);
   EXPECT_EQ(world.bodies().size(), 2u);
+  EXPECT_TRUE(world.contains(c) && world.contains(d));
 }
 
 TEST(WorldApi, ModeParamsAndClustersChangeAtRunTime) {
