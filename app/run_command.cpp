@@ -1,7 +1,9 @@
 // `softbody run`: steps a scene without a window, exports frames, prints per-phase timings.
 #include <CLI/CLI.hpp>
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <vector>
 
 #include "app/commands.h"
 #include "sim/frame_export.h"
@@ -12,7 +14,7 @@ namespace sb::app {
 
 namespace {
 
-void printTimings(const StepProfile& sum, int steps, long long particles) {
+void printTimings(const StepProfile& sum, double deformSeconds, int steps, long long particles) {
   auto line = [&](const char* name, double seconds) {
     const double perStep = seconds / steps;
     std::printf("  %-11s %10.4f ms/step %10.2f ns/particle/step\n", name, perStep * 1e3,
@@ -24,9 +26,13 @@ void printTimings(const StepProfile& sum, int steps, long long particles) {
   line("plasticity", sum.plasticity);
   line("integrate", sum.integrate);
   line("damping", sum.damping);
+  line("contacts", sum.contacts);
   line("collide", sum.collide);
   line("check", sum.check);
-  line("total", sum.total());
+  line("deform", deformSeconds);
+  line("total", sum.total() + deformSeconds);
+  std::printf("%.1f steps per second (simulation%s)\n", steps / (sum.total() + deformSeconds),
+              deformSeconds > 0 ? " and render-mesh deform" : " only");
 }
 
 }  // namespace
@@ -42,6 +48,7 @@ int runHeadlessCommand(int argc, char** argv) {
   int every = 1;
   std::string format = "obj";
   int threads = 0;
+  bool noDeform = false;
   cli.add_option("scene", scenePath, "Scene file (JSON)")->required();
   cli.add_option("--steps", steps, "Number of steps to run (≥ 1)")
       ->required()
@@ -57,6 +64,9 @@ int runHeadlessCommand(int argc, char** argv) {
       ->check(CLI::IsMember({"obj", "bin"}));
   cli.add_option("--threads", threads, "Simulation threads (default: all cores)")
       ->check(CLI::Range(1, 256));
+  cli.add_flag("--no-deform", noDeform,
+               "Do not update the render meshes each step (by default they follow the "
+               "particles every step, as in the viewer)");
   try {
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -86,17 +96,32 @@ int runHeadlessCommand(int argc, char** argv) {
       return 1;
     }
   }
-  long long particles = 0;
+  long long particles = 0, renderVertices = 0;
   for (const SceneBody& b : scene.bodies) particles += scene.world.particleCount(b.handle);
-  std::printf("%s: %zu bodies, %lld particles, dt %.6g s, %d substeps, %d threads\n",
-              scenePath.c_str(), scene.bodies.size(), particles, settings.timeStep,
-              settings.substeps, threadCount());
+  std::vector<PointsRowMajor> meshes(scene.bodies.size());
+  for (size_t i = 0; i < scene.bodies.size(); ++i) {
+    scene.renderVertices(int(i), meshes[i]);
+    renderVertices += meshes[i].rows();
+  }
+  std::printf(
+      "%s: %zu bodies, %lld particles, %lld render vertices, dt %.6g s, %d substeps, "
+      "%d threads\n",
+      scenePath.c_str(), scene.bodies.size(), particles, renderVertices, settings.timeStep,
+      settings.substeps, threadCount());
 
   StepProfile sum;
+  double deformSeconds = 0;
+  long long contacts = 0;
   int exported = 0;
   for (int s = 1; s <= steps; ++s) {
     scene.world.step();
     sum += scene.world.lastProfile();
+    contacts += scene.world.lastContactCount();
+    if (!noDeform) {
+      const auto t0 = std::chrono::steady_clock::now();
+      for (size_t i = 0; i < scene.bodies.size(); ++i) scene.renderVertices(int(i), meshes[i]);
+      deformSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    }
     for (const WorldEvent& e : scene.world.takeEvents())
       std::fprintf(stderr, "softbody run: step %d: %s\n", s, e.message.c_str());
     if (!exportDir.empty() && s % every == 0) {
@@ -119,7 +144,8 @@ int runHeadlessCommand(int argc, char** argv) {
   if (!exportDir.empty()) std::printf("exported %d frames to %s\n", exported, exportDir.c_str());
   std::printf("state hash %016llx after %.4f s simulated\n",
               static_cast<unsigned long long>(scene.world.stateHash()), scene.world.time());
-  printTimings(sum, steps, particles);
+  std::printf("%.1f body-body contacts per sub-step on average\n", double(contacts) / steps);
+  printTimings(sum, deformSeconds, steps, particles);
   return 0;
 }
 

@@ -15,7 +15,9 @@ namespace sb::app {
 
 namespace {
 
-nlohmann::json vec(const glm::vec3& v) { return {v.x, v.y, v.z}; }
+nlohmann::json vec(const glm::vec3& v) {
+  return {v.x, v.y, v.z};
+}
 
 }  // namespace
 
@@ -36,11 +38,12 @@ void ViewerApp::writeStats(const std::string& path) const {
                      {"render", timings_.renderSum / frames},
                      {"frame", timings_.frameSum / std::max(frames - 1.0, 1.0)}};
   const StepProfile& p = timings_.phaseSum;
-  j["msPerStep"] = {{"external", 1e3 * p.external / steps}, {"goals", 1e3 * p.goals / steps},
-                    {"plasticity", 1e3 * p.plasticity / steps},
-                    {"integrate", 1e3 * p.integrate / steps}, {"damping", 1e3 * p.damping / steps},
-                    {"collide", 1e3 * p.collide / steps}, {"check", 1e3 * p.check / steps},
-                    {"total", 1e3 * p.total() / steps}};
+  j["msPerStep"] = {
+      {"external", 1e3 * p.external / steps},     {"goals", 1e3 * p.goals / steps},
+      {"plasticity", 1e3 * p.plasticity / steps}, {"integrate", 1e3 * p.integrate / steps},
+      {"damping", 1e3 * p.damping / steps},       {"contacts", 1e3 * p.contacts / steps},
+      {"collide", 1e3 * p.collide / steps},       {"check", 1e3 * p.check / steps},
+      {"total", 1e3 * p.total() / steps}};
   j["steps"] = timings_.steps;
   j["events"] = eventCount_;
   j["error"] = errorMessage_;
@@ -49,14 +52,10 @@ void ViewerApp::writeStats(const std::string& path) const {
   json widgets = json::object();
   for (const auto& [name, r] : widgetRects_) widgets[name] = {r[0], r[1], r[2], r[3]};
   j["widgets"] = widgets;
-  j["camera"] = {{"eye", vec(camera_.eye())},
-                 {"target", vec(camera_.target)},
-                 {"distance", camera_.distance},
-                 {"yaw", camera_.yaw},
-                 {"pitch", camera_.pitch},
-                 {"right", vec(camera_.right())},
-                 {"up", vec(camera_.up())},
-                 {"forward", vec(camera_.forward())}};
+  j["camera"] = {{"eye", vec(camera_.eye())},    {"target", vec(camera_.target)},
+                 {"distance", camera_.distance}, {"yaw", camera_.yaw},
+                 {"pitch", camera_.pitch},       {"right", vec(camera_.right())},
+                 {"up", vec(camera_.up())},      {"forward", vec(camera_.forward())}};
   j["drag"] = {{"active", drag_.active},
                {"body", drag_.body},
                {"nearestParticle", drag_.nearestParticle},
@@ -76,7 +75,8 @@ void ViewerApp::writeStats(const std::string& path) const {
     glm::vec2 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
     for (Eigen::Index r = 0; r < v.vertices.rows(); ++r) {
       glm::vec2 pixel;
-      if (projectToWindow(glm::vec3(v.vertices(r, 0), v.vertices(r, 1), v.vertices(r, 2)), &pixel)) {
+      if (projectToWindow(glm::vec3(v.vertices(r, 0), v.vertices(r, 1), v.vertices(r, 2)),
+                          &pixel)) {
         lo = glm::min(lo, pixel);
         hi = glm::max(hi, pixel);
       }
@@ -89,7 +89,8 @@ void ViewerApp::writeStats(const std::string& path) const {
     json grab = nullptr;
     for (int ring = 0; ring < 40 && grab.is_null(); ++ring) {
       for (int k = 0; k < std::max(1, 8 * ring) && grab.is_null(); ++k) {
-        const float angle = 6.2831853f * static_cast<float>(k) / static_cast<float>(std::max(1, 8 * ring));
+        const float angle =
+            6.2831853f * static_cast<float>(k) / static_cast<float>(std::max(1, 8 * ring));
         const glm::vec2 pixel = centrePixel + 4.0f * static_cast<float>(ring) *
                                                   glm::vec2(std::cos(angle), std::sin(angle));
         if (pixel.x < 0 || pixel.y < 0 || pixel.x >= w || pixel.y >= h) continue;
@@ -106,7 +107,8 @@ void ViewerApp::writeStats(const std::string& path) const {
             nearest = static_cast<int>(o);
           }
         }
-        if (nearest == static_cast<int>(i)) grab = {static_cast<int>(pixel.x), static_cast<int>(pixel.y)};
+        if (nearest == static_cast<int>(i))
+          grab = {static_cast<int>(pixel.x), static_cast<int>(pixel.y)};
       }
     }
     b["grabPixel"] = grab;

@@ -76,7 +76,8 @@ void ViewerApp::drawUi() {
 
   if (!eventLog_.empty()) {
     ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1.0f, 0.85f, 0.3f, 1.0f));
-    ImGui::TextWrapped("%ld simulation event(s); latest: %s", eventCount_, eventLog_.front().c_str());
+    ImGui::TextWrapped("%ld simulation event(s); latest: %s", eventCount_,
+                       eventLog_.front().c_str());
     ImGui::PopStyleColor();
     tooltip("Bodies whose state became NaN/Inf are reset to their start by the simulation.");
     if (ImGui::TreeNode("All events")) {
@@ -102,8 +103,9 @@ void ViewerApp::drawUi() {
     tooltip("Show the particle mesh (cage) as a wireframe (key: C).");
     ImGui::SameLine();
     ImGui::Checkbox("clusters", &showClusters_);
-    tooltip("Show each shape-matching cluster in its own colour: lines from the cluster's centre "
-            "to its particles (key: K).");
+    tooltip(
+        "Show each shape-matching cluster in its own colour: lines from the cluster's centre "
+        "to its particles (key: K).");
     ImGui::Checkbox("goals", &showGoals_);
     tooltip("Show the goal positions shape matching pulls the particles toward (key: G).");
     ImGui::SameLine();
@@ -111,8 +113,9 @@ void ViewerApp::drawUi() {
     tooltip("Show static colliders other than the ground as wireframes.");
     ImGui::SameLine();
     ImGui::Checkbox("cull", &cullBackFaces_);
-    tooltip("Skip the back faces of the body meshes (faster). Turn off to see the inside of "
-            "inverted or torn meshes.");
+    tooltip(
+        "Skip the back faces of the body meshes (faster). Turn off to see the inside of "
+        "inverted or torn meshes.");
   }
   if (ImGui::CollapsingHeader("Timings", ImGuiTreeNodeFlags_DefaultOpen)) drawTimingPanel();
   if (ImGui::CollapsingHeader("Help")) {
@@ -139,10 +142,11 @@ void ViewerApp::drawWorldPanel() {
   }
   tooltip("Gravity acceleration in m/s^2 (x, y, z). Drag a number or double-click to type.");
   double stepMs = s.timeStep * 1000.0;
-  if (sliderDouble("time step (ms)", &stepMs, 1.0f, 50.0f, "%.2f",
-                   "Simulated time advanced per frame, milliseconds. One step runs per drawn frame, "
-                   "so 16.67 ms at 60 fps is real time.",
-                   ImGuiSliderFlags_Logarithmic)) {
+  if (sliderDouble(
+          "time step (ms)", &stepMs, 1.0f, 50.0f, "%.2f",
+          "Simulated time advanced per frame, milliseconds. One step runs per drawn frame, "
+          "so 16.67 ms at 60 fps is real time.",
+          ImGuiSliderFlags_Logarithmic)) {
     s.timeStep = stepMs / 1000.0;
     changed = true;
   }
@@ -178,8 +182,9 @@ void ViewerApp::drawWorldPanel() {
   if (ImGui::SliderFloat("drag stiffness", &dragStiffness_, 0.01f, 1.0f, "%.2f")) {
     if (drag_.active) scene_.world.setDragStiffness(drag_.id, dragStiffness_);
   }
-  tooltip("Fraction of the gap between the grabbed point and the mouse closed per step "
-          "(mouse dragging).");
+  tooltip(
+      "Fraction of the gap between the grabbed point and the mouse closed per step "
+      "(mouse dragging).");
 }
 
 void ViewerApp::drawBodyPanel(int body) {
@@ -201,14 +206,18 @@ void ViewerApp::drawBodyPanel(int body) {
       p.mode = static_cast<Mode>(mode);
       changed = true;
     }
-    tooltip("Shape matching goal: rigid keeps the rest shape; linear allows shear and stretch; "
-            "quadratic also bending and twisting.");
-    changed |= sliderDouble("alpha", &p.alpha, 0.0f, 1.0f, "%.3f",
-                            "Stiffness: fraction of the way to the goal per step (1 = rigid-stiff).");
-    changed |= sliderDouble("beta", &p.beta, 0.0f, 1.0f, "%.3f",
-                            "Blend of the goal between rotation only (0) and the linear/quadratic fit (1).");
-    changed |= sliderDouble("damping", &p.damping, 0.0f, 1.0f, "%.3f",
-                            "Damping per step of the velocity relative to the body's rigid motion.");
+    tooltip(
+        "Shape matching goal: rigid keeps the rest shape; linear allows shear and stretch; "
+        "quadratic also bending and twisting.");
+    changed |=
+        sliderDouble("alpha", &p.alpha, 0.0f, 1.0f, "%.3f",
+                     "Stiffness: fraction of the way to the goal per step (1 = rigid-stiff).");
+    changed |= sliderDouble(
+        "beta", &p.beta, 0.0f, 1.0f, "%.3f",
+        "Blend of the goal between rotation only (0) and the linear/quadratic fit (1).");
+    changed |=
+        sliderDouble("damping", &p.damping, 0.0f, 1.0f, "%.3f",
+                     "Damping per step of the velocity relative to the body's rigid motion.");
     changed |= sliderDouble("c_yield", &p.plasticity.yield, 0.0f, 1.0f, "%.3f",
                             "Plastic yield: stretch ||S - I|| above which the rest shape creeps.");
     changed |= sliderDouble("c_creep", &p.plasticity.creep, 0.0f, 20.0f, "%.2f",
@@ -254,8 +263,9 @@ void ViewerApp::drawBodyPanel(int body) {
       float overlap = static_cast<float>(clusters.overlap);
       ImGui::SliderFloat("overlap (m)", &overlap, 0.0f, size * 0.5f, "%.3f");
       if (ImGui::IsItemDeactivatedAfterEdit()) rebuild = true;
-      tooltip("Each cell also takes particles within this distance: couples neighbouring "
-              "clusters. Applied when you release the slider.");
+      tooltip(
+          "Each cell also takes particles within this distance: couples neighbouring "
+          "clusters. Applied when you release the slider.");
       clusters.overlap = overlap;
     }
     if (rebuild) {
@@ -280,16 +290,19 @@ void ViewerApp::drawTimingPanel() {
   ImGui::Text("  external %.3f  goals %.3f  plastic %.3f", p.external * ms, p.goals * ms,
               p.plasticity * ms);
   ImGui::Text("  integrate %.3f  damping %.3f", p.integrate * ms, p.damping * ms);
-  ImGui::Text("  collide %.3f  check %.3f", p.collide * ms, p.check * ms);
+  ImGui::Text("  contacts %.3f  collide %.3f  check %.3f", p.contacts * ms, p.collide * ms,
+              p.check * ms);
   ImGui::Text("deform %.3f ms   render %.3f ms", timings_.lastDeform, timings_.lastRender);
-  tooltip("deform: render vertices = W x particles, plus smooth normals.\n"
-          "render: panel, drawing, buffer swap.");
+  tooltip(
+      "deform: render vertices = W x particles, plus smooth normals.\n"
+      "render: panel, drawing, buffer swap.");
   ImGui::Text("frame %.2f ms", timings_.lastFrame);
   int cap = static_cast<int>(options_.fpsCap + 0.5);
   if (ImGui::SliderInt("fps cap", &cap, 0, 240, cap == 0 ? "uncapped" : "%d fps"))
     options_.fpsCap = cap;
-  tooltip("Frames per second at most (0 = as fast as possible). One simulation step runs per "
-          "frame. Vsync does not limit the rate under Xvfb, this cap does.");
+  tooltip(
+      "Frames per second at most (0 = as fast as possible). One simulation step runs per "
+      "frame. Vsync does not limit the rate under Xvfb, this cap does.");
   const int n = FrameTimings::kHistory;
   const ImVec2 plotSize(kPanelWidth - 140.0f, 36.0f);
   ImGui::PlotLines("simulation", timings_.simHistory.data(), n, timings_.cursor, nullptr, 0.0f,
@@ -312,15 +325,17 @@ void ViewerApp::drawScenePanel() {
   tooltip("Path of a scene JSON file to open.");
   if (ImGui::Button("Open")) openScene(scenePathInput_);
   recordWidget("open");
-  tooltip("Open the scene file above. If it has an error, the message shows here and the "
-          "current scene keeps running.");
+  tooltip(
+      "Open the scene file above. If it has an error, the message shows here and the "
+      "current scene keeps running.");
   ImGui::InputText("save as", &savePathInput_);
   recordWidget("savePath");
   tooltip("Path to save the current scene with its current parameters to.");
   if (ImGui::Button("Save")) saveCurrentScene(savePathInput_);
   recordWidget("save");
-  tooltip("Write the scene with the current world settings and body parameters "
-          "(atomic: a temporary file renamed over the target).");
+  tooltip(
+      "Write the scene with the current world settings and body parameters "
+      "(atomic: a temporary file renamed over the target).");
   ImGui::InputText("screenshot", &screenshotPathInput_);
   tooltip("PNG path the Screenshot button writes to.");
 }

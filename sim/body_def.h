@@ -2,6 +2,7 @@
 // body runs. Every field has a default that gives a sensible body; units are SI.
 #pragma once
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -72,6 +73,11 @@ struct BodyDef {
   // Particles held in place (indices within the body). They keep their start position and take
   // part in shape matching with their ordinary mass, so they never become infinite weights.
   std::vector<int> pinned;
+  // The body's closed surface for body–body contact: triangles of particle indices,
+  // counter-clockwise seen from outside (normally the cage's faces). It must be a closed,
+  // 2-manifold, outward-oriented surface (checked). Empty: other bodies pass through this one,
+  // while its own particles are still kept out of the other bodies' surfaces.
+  std::vector<std::array<int, 3>> surface;
   ClusterDef clusters;
   BodyParams params;
 };

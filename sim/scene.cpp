@@ -205,6 +205,7 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def) {
   def.params.beta = f.number("beta", def.params.beta, 0.0, 1.0);
   def.params.preserveVolume = f.boolean("preserveVolume", def.params.preserveVolume);
   def.params.damping = f.number("damping", def.params.damping, 0.0, 1.0);
+  sb.contact = f.boolean("contact", true);
   if (f.has("plasticity")) {
     Fields p(f.raw("plasticity"), f.where("plasticity"), f.file());
     def.params.plasticity.yield = p.number("yield", 0.0, 0.0, 1e6);
@@ -238,6 +239,8 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def) {
   def.positions.clear();
   for (const Vec3& v : mesh.vertices) def.positions.push_back(R * (sb.scale * v) + sb.translation);
   sb.cageTriangles = mesh.triangles;
+  // The cage is the body's surface for body–body contact (the World checks it is closed).
+  if (sb.contact) def.surface = mesh.triangles;
 
   if (!renderPath.empty()) {
     cage::TriangleMesh detail;
@@ -284,6 +287,8 @@ Scene parseScene(const std::string& text, const std::string& name, const std::st
     settings.gravity = w.vec3("gravity", settings.gravity, 1e4);
     settings.timeStep = w.number("timeStep", settings.timeStep, 1e-7, 10.0);
     settings.substeps = w.integer("substeps", settings.substeps, 1, 1000);
+    settings.bodyContact = w.boolean("bodyContact", settings.bodyContact);
+    settings.contactFriction = w.number("contactFriction", settings.contactFriction, 0.0, 1e3);
     w.rejectUnknown();
   }
   Scene scene;
@@ -355,7 +360,9 @@ void saveScene(const Scene& scene, const std::string& path) {
   json root;
   root["world"] = {{"gravity", vec(w.settings().gravity)},
                    {"timeStep", w.settings().timeStep},
-                   {"substeps", w.settings().substeps}};
+                   {"substeps", w.settings().substeps},
+                   {"bodyContact", w.settings().bodyContact},
+                   {"contactFriction", w.settings().contactFriction}};
   json colliders = json::array();
   for (const Collider& c : w.colliders()) {
     json j = {{"type", colliderShapeName(c.shape)}, {"friction", c.friction}};
@@ -397,6 +404,7 @@ void saveScene(const Scene& scene, const std::string& path) {
               {"beta", p.beta},
               {"preserveVolume", p.preserveVolume},
               {"damping", p.damping},
+              {"contact", b.contact},
               {"plasticity",
                {{"yield", p.plasticity.yield},
                 {"creep", p.plasticity.creep},

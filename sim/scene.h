@@ -44,6 +44,7 @@ struct SceneBody {
   Vec3 rotationDegrees = Vec3::Zero();  // XYZ Euler angles, degrees
   double scale = 1.0;
   double totalMass = 1.0;
+  bool contact = true;  // the cage is the body's surface for body–body contact
 };
 
 struct Scene {

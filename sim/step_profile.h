@@ -9,10 +9,11 @@ struct StepProfile {
   double plasticity = 0;  // seconds: per cluster plastic update and rest-data rebuild
   double integrate = 0;   // seconds: goal blending, Müller integration
   double damping = 0;     // seconds: damping of non-rigid velocity
+  double contacts = 0;    // seconds: body–body contact (bounds, grids, detection, response)
   double collide = 0;     // seconds: static colliders, friction
   double check = 0;       // seconds: NaN/Inf detection and recovery
   double total() const {
-    return external + goals + plasticity + integrate + damping + collide + check;
+    return external + goals + plasticity + integrate + damping + contacts + collide + check;
   }
   StepProfile& operator+=(const StepProfile& o) {
     external += o.external;
@@ -20,6 +21,7 @@ struct StepProfile {
     plasticity += o.plasticity;
     integrate += o.integrate;
     damping += o.damping;
+    contacts += o.contacts;
     collide += o.collide;
     check += o.check;
     return *this;

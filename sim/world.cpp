@@ -8,6 +8,8 @@
 #include <map>
 #include <stdexcept>
 
+#include "sim/body_contact.h"
+#include "sim/cage/cage_validation.h"
 #include "sim/cluster_layout.h"
 #include "sim/cluster_rest.h"
 #include "sim/parallel_for.h"
@@ -26,6 +28,13 @@ constexpr int kParticlesPerBlock = 4096;  // particles per integration/collision
 // Below this many particles (or cluster members) a phase runs on one thread: fork/join would
 // cost more than it saves.
 constexpr long long kMinParallelWork = 16384;
+// Per-body phases (damping, contacts) fork only in worlds with at least this many particles.
+constexpr long long kMinParallelBodyWork = 2048;
+// Separation body–body contacts restore, as a fraction of the obstacle's surface spacing: a
+// small positive gap keeps resting particles outside despite float round-off.
+constexpr float kContactGap = 0.01f;
+// Gauss–Seidel sweeps over a sub-step's body–body contacts.
+constexpr int kContactSweeps = 4;
 
 double secondsSince(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
@@ -82,6 +91,12 @@ struct BodyModel {
   std::vector<MomentTask> tasks;  // in cluster order
   std::vector<int> taskStart;     // tasks of cluster c: taskStart[c] .. taskStart[c+1]
   bool wholeBodyCluster = false;  // exactly one cluster holding every particle in order
+  // Body–body contact: the closed surface (may be empty) and its adjacency, the
+  // surface's mean edge length at rest (m) and the inverse masses contacts use (0 = pinned).
+  std::vector<Triangle> surface;
+  SurfaceTopology surfaceTopology;
+  float spacing = 0;
+  Eigen::VectorXf contactInvMass;
   int clusterCount() const { return static_cast<int>(clusterRest.size()); }
   int particleCount() const { return static_cast<int>(rest.rows()); }
 };
@@ -135,6 +150,11 @@ std::shared_ptr<BodyModel> buildModel(const BodyDef& def, const ClusterDef& clus
       m->startVelocities.row(i) = def.velocity.transpose().cast<float>();
     }
     m->pinned = def.pinned;
+    m->surface = def.surface;
+    m->surfaceTopology = buildSurfaceTopology(m->surface, n);
+    m->spacing = float(meanEdgeLength(m->surface, def.positions));
+    m->contactInvMass = m->mass.cwiseInverse();
+    for (int p : m->pinned) m->contactInvMass[p] = 0.0f;
   }
   m->clusterDef = clusters;
   std::vector<Vec3> restWorld(static_cast<size_t>(m->particleCount()));
@@ -266,6 +286,24 @@ struct WorkLayout {
   long long members = 0, particles = 0;
 };
 
+// Per-body data of the Contacts phase, derived from the positions every sub-step.
+struct ContactScratch {
+  Eigen::AlignedBox3f box;             // particles' bounding box
+  float maxSpeed = 0;                  // m/s
+  Vec3f meanVelocity = Vec3f::Zero();  // m/s, of the centre of mass
+  float maxRelativeSpeed = 0;          // m/s, fastest particle relative to the centre of mass
+  bool obstacle = false;               // has a surface and meets some other body this sub-step
+  Eigen::AlignedBox3f region;          // obstacles: bounding box of the probes that meet it
+  bool involved = false;               // meets some other body this sub-step
+  SurfaceGrid grid;
+  ContactBody view;  // set up by prepareContactBody for involved bodies
+};
+
+// A probe body whose particles are tested against an obstacle body's surface.
+struct ContactPair {
+  int probe, obstacle;  // slots
+};
+
 }  // namespace
 
 struct World::Data {
@@ -285,6 +323,10 @@ struct World::Data {
   std::vector<ClusterMoments> partial;
   std::vector<double> plasticSeconds;
   std::vector<char> clusterBad, blockBad, bad;
+  std::vector<ContactScratch> contactScratch;  // per slot
+  std::vector<ContactPair> contactPairs;
+  std::vector<std::vector<Contact>> pairContacts;  // per pair
+  int contactCount = 0;
 
   BodySlot& slot(BodyHandle h) {
     if (h.index >= slots.size() || !slots[h.index].alive ||
@@ -302,7 +344,9 @@ struct World::Data {
   void computeGoals(double h, std::vector<char>& badBodies, StepProfile& prof);
   void integrate(double h, std::vector<char>& badBodies);
   void damp();
+  void collideBodies(double h);
   void collide();
+  void prepareContactBody(int s);
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -591,36 +635,197 @@ void World::Data::damp() {
   std::vector<int> damped;
   for (int s : order)
     if (slots[size_t(s)].params.damping > 0.0) damped.push_back(s);
-  parallelFor(static_cast<int>(damped.size()), 2, [&](int k) {
-    BodySlot& b = slots[size_t(damped[size_t(k)])];
-    const BodyModel& m = *b.model;
-    MatX3f& x = b.state.x;
-    MatX3f& v = b.state.v;
-    const int n = m.particleCount();
-    // Fit the rigid motion (linear and angular velocity) that has the body's momenta.
-    Vec3 xc = Vec3::Zero(), vc = Vec3::Zero();
-    for (int i = 0; i < n; ++i) {
-      xc += double(m.mass[i]) * x.row(i).transpose().cast<double>();
-      vc += double(m.mass[i]) * v.row(i).transpose().cast<double>();
+  parallelFor(static_cast<int>(damped.size()),
+              layout.particles >= kMinParallelBodyWork ? 2 : INT32_MAX, [&](int k) {
+                BodySlot& b = slots[size_t(damped[size_t(k)])];
+                const BodyModel& m = *b.model;
+                MatX3f& x = b.state.x;
+                MatX3f& v = b.state.v;
+                const int n = m.particleCount();
+                // Fit the rigid motion (linear and angular velocity) that has the body's momenta.
+                Vec3 xc = Vec3::Zero(), vc = Vec3::Zero();
+                for (int i = 0; i < n; ++i) {
+                  xc += double(m.mass[i]) * x.row(i).transpose().cast<double>();
+                  vc += double(m.mass[i]) * v.row(i).transpose().cast<double>();
+                }
+                xc /= m.totalMass;
+                vc /= m.totalMass;
+                Vec3 L = Vec3::Zero();
+                Mat3 I = Mat3::Zero();
+                for (int i = 0; i < n; ++i) {
+                  const Vec3 r = x.row(i).transpose().cast<double>() - xc;
+                  L += double(m.mass[i]) * r.cross(v.row(i).transpose().cast<double>());
+                  I += double(m.mass[i]) * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
+                }
+                const Vec3 omega = symmetricPseudoInverse<3>(I, 1e-9) * L;
+                const double kd = b.params.damping;
+                for (int i = 0; i < n; ++i) {
+                  const Vec3 r = x.row(i).transpose().cast<double>() - xc;
+                  const Vec3 vi = v.row(i).transpose().cast<double>();
+                  const Vec3 rigid = vc + omega.cross(r);
+                  v.row(i) = (vi + kd * (rigid - vi)).transpose().cast<float>();
+                }
+              });
+}
+
+void World::Data::prepareContactBody(int s) {
+  BodySlot& b = slots[size_t(s)];
+  const BodyModel& m = *b.model;
+  ContactScratch& cs = contactScratch[size_t(s)];
+  ContactBody& view = cs.view;
+  for (int a = 0; a < 3; ++a) {
+    view.x[a] = b.state.x.col(a).data();
+    view.v[a] = b.state.v.col(a).data();
+  }
+  view.mass = m.mass.data();
+  view.invMass = m.contactInvMass.data();
+  view.count = m.particleCount();
+  view.triangles = &m.surface;
+  view.topology = &m.surfaceTopology;
+  view.grid = &cs.grid;
+  view.gap = kContactGap * m.spacing;
+  view.meanVelocity = cs.meanVelocity;
+  view.maxRelativeSpeed = cs.maxRelativeSpeed;
+  // A stiff body answers a contact mostly as a whole (see sim/body_contact.h); one held by
+  // pinned particles cannot move as a whole.
+  prepareRigidResponse(view, m.pinned.empty() ? float(b.params.alpha) : 0.0f);
+}
+
+void World::Data::collideBodies(double h) {
+  contactCount = 0;
+  if (!settings.bodyContact || order.size() < 2) return;
+  contactScratch.resize(slots.size());
+  const int minParallel = layout.particles >= kMinParallelBodyWork ? 2 : INT32_MAX;
+  // Bounds and speeds of every body (serial: a light pass, not worth a fork/join).
+  for (int k = 0; k < static_cast<int>(order.size()); ++k) {
+    const int s = order[size_t(k)];
+    const BodyState& st = slots[size_t(s)].state;
+    ContactScratch& cs = contactScratch[size_t(s)];
+    const BodyModel& m = *slots[size_t(s)].model;
+    cs.box.setEmpty();
+    Eigen::Vector3f momentum = Eigen::Vector3f::Zero();
+    for (int i = 0; i < st.x.rows(); ++i) {
+      cs.box.extend(st.x.row(i).transpose());
+      momentum += m.mass[i] * st.v.row(i).transpose();
     }
-    xc /= m.totalMass;
-    vc /= m.totalMass;
-    Vec3 L = Vec3::Zero();
-    Mat3 I = Mat3::Zero();
-    for (int i = 0; i < n; ++i) {
-      const Vec3 r = x.row(i).transpose().cast<double>() - xc;
-      L += double(m.mass[i]) * r.cross(v.row(i).transpose().cast<double>());
-      I += double(m.mass[i]) * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
+    cs.meanVelocity = momentum / float(m.totalMass);
+    float speed2 = 0, relative2 = 0;
+    for (int i = 0; i < st.x.rows(); ++i) {
+      speed2 = std::max(speed2, st.v.row(i).squaredNorm());
+      relative2 = std::max(relative2, (st.v.row(i).transpose() - cs.meanVelocity).squaredNorm());
     }
-    const Vec3 omega = symmetricPseudoInverse<3>(I, 1e-9) * L;
-    const double kd = b.params.damping;
-    for (int i = 0; i < n; ++i) {
-      const Vec3 r = x.row(i).transpose().cast<double>() - xc;
-      const Vec3 vi = v.row(i).transpose().cast<double>();
-      const Vec3 rigid = vc + omega.cross(r);
-      v.row(i) = (vi + kd * (rigid - vi)).transpose().cast<float>();
-    }
+    cs.maxSpeed = std::sqrt(speed2);
+    cs.maxRelativeSpeed = std::sqrt(relative2);
+    cs.obstacle = false;
+    cs.involved = false;
+  }
+  // A particle moves at most h·maxSpeed in this sub-step, and so does the surface it meets.
+  // Boxes grow by the grid's base reach (a quarter spacing) plus twice that travel, so no pair
+  // that can touch within the sub-step is missed; each particle then looks only as far as its
+  // own speed needs (findContacts).
+  float maxSpeed = 0;
+  for (int s : order) maxSpeed = std::max(maxSpeed, contactScratch[size_t(s)].maxSpeed);
+  const float travel = 2.0f * float(h) * maxSpeed;
+  auto reachOf = [&](int s) {
+    const BodyModel& m = *slots[size_t(s)].model;
+    return m.surface.empty() ? 0.0f : 0.25f * m.spacing;
+  };
+  auto grown = [&](int s) {
+    Eigen::AlignedBox3f box = contactScratch[size_t(s)].box;
+    box.min().array() -= reachOf(s) + travel;
+    box.max().array() += reachOf(s) + travel;
+    return box;
+  };
+
+  // Broad phase: sweep over the grown boxes sorted along x; pairs come out in creation order.
+  std::vector<int> sweep(order.begin(), order.end());
+  std::vector<Eigen::AlignedBox3f> boxes(slots.size());
+  for (int s : order) boxes[size_t(s)] = grown(s);
+  std::vector<int> rank(slots.size());
+  for (size_t k = 0; k < order.size(); ++k) rank[size_t(order[k])] = int(k);
+  std::sort(sweep.begin(), sweep.end(), [&](int a, int b) {
+    const float ma = boxes[size_t(a)].min().x(), mb = boxes[size_t(b)].min().x();
+    return ma != mb ? ma < mb : rank[size_t(a)] < rank[size_t(b)];
   });
+  contactPairs.clear();
+  for (size_t i = 0; i < sweep.size(); ++i) {
+    const int a = sweep[i];
+    for (size_t j = i + 1; j < sweep.size(); ++j) {
+      const int b = sweep[j];
+      if (boxes[size_t(b)].min().x() > boxes[size_t(a)].max().x()) break;
+      if (!boxes[size_t(a)].intersects(boxes[size_t(b)])) continue;
+      const int first = rank[size_t(a)] < rank[size_t(b)] ? a : b;
+      const int second = first == a ? b : a;
+      if (!slots[size_t(second)].model->surface.empty()) contactPairs.push_back({first, second});
+      if (!slots[size_t(first)].model->surface.empty()) contactPairs.push_back({second, first});
+    }
+  }
+  std::sort(contactPairs.begin(), contactPairs.end(),
+            [&](const ContactPair& x, const ContactPair& y) {
+              const int xa = std::min(rank[size_t(x.probe)], rank[size_t(x.obstacle)]);
+              const int ya = std::min(rank[size_t(y.probe)], rank[size_t(y.obstacle)]);
+              if (xa != ya) return xa < ya;
+              const int xb = std::max(rank[size_t(x.probe)], rank[size_t(x.obstacle)]);
+              const int yb = std::max(rank[size_t(y.probe)], rank[size_t(y.obstacle)]);
+              if (xb != yb) return xb < yb;
+              return rank[size_t(x.probe)] < rank[size_t(y.probe)];
+            });
+  if (contactPairs.empty()) return;
+
+  // Each obstacle's grid covers only where its probes' particles are.
+  std::vector<int> obstacles, involved;
+  for (const ContactPair& p : contactPairs) {
+    ContactScratch& cs = contactScratch[size_t(p.obstacle)];
+    if (!cs.obstacle) {
+      obstacles.push_back(p.obstacle);
+      cs.region.setEmpty();
+    }
+    cs.obstacle = true;
+    Eigen::AlignedBox3f probeBox = contactScratch[size_t(p.probe)].box;
+    probeBox.min().array() -= travel;
+    probeBox.max().array() += travel;
+    cs.region.extend(probeBox);
+    for (int s : {p.probe, p.obstacle})
+      if (!contactScratch[size_t(s)].involved) {
+        contactScratch[size_t(s)].involved = true;
+        involved.push_back(s);
+      }
+  }
+  std::sort(involved.begin(), involved.end(),
+            [&](int a, int b) { return rank[size_t(a)] < rank[size_t(b)]; });
+  for (int s : involved) prepareContactBody(s);
+  parallelFor(static_cast<int>(obstacles.size()), minParallel, [&](int k) {
+    const int s = obstacles[size_t(k)];
+    const BodyModel& m = *slots[size_t(s)].model;
+    const MatX3f& x = slots[size_t(s)].state.x;
+    ContactScratch& cs = contactScratch[size_t(s)];
+    // Cells of two spacings: a triangle grown by its reach (a quarter spacing) lands in at most
+    // 2×2×2 cells, and a cell holds a few dozen triangles (most rejected by their boxes).
+    const float reach = reachOf(s);
+    cs.grid.build(m.surface, x.col(0).data(), x.col(1).data(), x.col(2).data(), reach, m.spacing,
+                  cs.region);
+  });
+
+  // Narrow phase reads only, so pairs run in parallel; contacts then resolve one after another
+  // in pair order (Gauss–Seidel), which makes the result independent of the thread count.
+  pairContacts.resize(contactPairs.size());
+  parallelFor(static_cast<int>(contactPairs.size()), minParallel, [&](int k) {
+    const ContactPair& p = contactPairs[size_t(k)];
+    pairContacts[size_t(k)].clear();
+    findContacts(contactScratch[size_t(p.probe)].view, contactScratch[size_t(p.obstacle)].view,
+                 float(h), pairContacts[size_t(k)]);
+  });
+  // Several sweeps: a body pressed by several others (a stack) needs the corrections to travel
+  // through it, and each sweep sees the previous sweeps' results.
+  const float friction = float(settings.contactFriction);
+  for (int pass = 0; pass < kContactSweeps; ++pass)
+    for (size_t k = 0; k < contactPairs.size(); ++k) {
+      ContactBody& probe = contactScratch[size_t(contactPairs[k].probe)].view;
+      ContactBody& obstacle = contactScratch[size_t(contactPairs[k].obstacle)].view;
+      for (const Contact& c : pairContacts[k]) resolveContact(probe, obstacle, c, friction);
+    }
+  for (const auto& list : pairContacts) contactCount += static_cast<int>(list.size());
+  for (int s : involved) applyRigidResponse(contactScratch[size_t(s)].view);
 }
 
 void World::Data::collide() {
@@ -697,6 +902,10 @@ void World::Data::substep(double h, StepProfile& prof) {
   prof.damping += secondsSince(t);
 
   t = Clock::now();
+  collideBodies(h);
+  prof.contacts += secondsSince(t);
+
+  t = Clock::now();
   collide();
   prof.collide += secondsSince(t);
 
@@ -738,6 +947,9 @@ void World::setSettings(const WorldSettings& s) {
   if (s.substeps < 1 || s.substeps > 1000)
     throw std::invalid_argument("substeps: must be in [1, 1000], got " +
                                 std::to_string(s.substeps));
+  if (!(s.contactFriction >= 0.0 && s.contactFriction <= 1e3))
+    throw std::invalid_argument("contactFriction: must be in [0, 1000], got " +
+                                str(s.contactFriction));
   d_->settings = s;
 }
 
@@ -798,6 +1010,29 @@ BodyHandle World::addBody(const BodyDef& def) {
       throw std::invalid_argument("pinned: particle index " + std::to_string(p) +
                                   " out of range [0, " + std::to_string(n) + ")");
   validateParams(def.params);
+  if (!def.surface.empty()) {
+    // Interior particles (not on the surface) are allowed: validate the surface's own points.
+    std::vector<int> remap(size_t(n), -1);
+    cage::TriangleMesh mesh;
+    for (size_t t = 0; t < def.surface.size(); ++t)
+      for (int i : def.surface[t]) {
+        if (i < 0 || i >= n)
+          throw std::invalid_argument("surface[" + std::to_string(t) + "]: particle index " +
+                                      std::to_string(i) + " out of range [0, " + std::to_string(n) +
+                                      ")");
+        if (remap[size_t(i)] < 0) {
+          remap[size_t(i)] = static_cast<int>(mesh.vertices.size());
+          mesh.vertices.push_back(def.positions[size_t(i)]);
+        }
+      }
+    for (const auto& t : def.surface)
+      mesh.triangles.push_back({remap[size_t(t[0])], remap[size_t(t[1])], remap[size_t(t[2])]});
+    try {
+      cage::validateCage(mesh, def.name);
+    } catch (const std::exception& e) {
+      throw std::invalid_argument(std::string("surface: ") + e.what());
+    }
+  }
 
   BodySlot slot;
   slot.model = buildModel(def, def.clusters, nullptr);  // throws on bad clusters
@@ -1038,6 +1273,10 @@ void World::reset() {
 double World::time() const {
   return d_->time;
 }
+int World::lastContactCount() const {
+  return d_->contactCount;
+}
+
 const StepProfile& World::lastProfile() const {
   return d_->profile;
 }

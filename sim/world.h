@@ -7,6 +7,7 @@
 //   Integrate   per particle: blend the goals of its clusters, v += α(g − x)/h + h·gravity,
 //               x += h·v  (Müller et al. 2005: stable for every h when α ≤ 1)
 //   Damping     damp velocity relative to each body's rigid motion (bodies with damping only)
+//   Contacts    particles pushed out of other bodies' surfaces, friction (sim/body_contact.h)
 //   Collide     push particles out of static colliders, friction
 //   Check       bodies with NaN/Inf are reset to their start and reported as events
 // Results depend only on the input and never on the thread count: every sum is formed in a
@@ -29,6 +30,8 @@ struct WorldSettings {
   Vec3 gravity = Vec3(0.0, -9.81, 0.0);  // m/s²
   double timeStep = 1.0 / 60.0;          // seconds advanced by step(), > 0
   int substeps = 1;                      // sub-steps per step(), 1 … 1000
+  bool bodyContact = true;               // bodies with a surface keep other bodies out
+  double contactFriction = 0.5;          // μ ≥ 0 between bodies (as Collider::friction)
 };
 
 // Refers to a body; stays valid until the body is removed (then contains() is false).
@@ -127,6 +130,7 @@ class World {
   void reset();          // every body back to its start state; plasticity and drags cleared
   double time() const;   // seconds simulated since creation or reset
   const StepProfile& lastProfile() const;  // phases of the last step() call
+  int lastContactCount() const;            // body–body contacts resolved in the last sub-step
   std::vector<WorldEvent> takeEvents();    // returns and clears pending events
 
   // Hash of the complete dynamic state (positions, velocities, plastic state), bit-exact.

@@ -1,0 +1,394 @@
+// Body–body contact: the geometry kernels against independent recomputation, and the World's
+// contact response against the guarantees of issue 5 (momentum, no tunnelling, resting, no NaN).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <random>
+
+#include "scene_checks.h"
+#include "sim/body_contact.h"
+#include "sim/cage/mesh_io.h"
+#include "sim/parallel.h"
+#include "sim/surface_geometry.h"
+#include "sim/surface_grid.h"
+#include "test_util.h"
+
+namespace sb {
+namespace {
+
+using test::pointTriangleDistance;
+using test::windingNumber;
+
+const std::string kBunnyCage = std::string(SOFTBODY_ASSET_DIR) + "/meshes/bunny_cage.obj";
+
+// The bunny's cage scaled to about one metre, its centre of mass at `centre`.
+struct Shape {
+  std::vector<Vec3> points;
+  std::vector<Triangle> triangles;
+};
+
+Shape bunnyCage(double scale, const Vec3& centre, const Mat3& rotation = Mat3::Identity()) {
+  const cage::TriangleMesh mesh = cage::readMesh(kBunnyCage);
+  Vec3 mean = Vec3::Zero();
+  for (const Vec3& v : mesh.vertices) mean += v;
+  mean /= double(mesh.vertices.size());
+  Shape s;
+  for (const Vec3& v : mesh.vertices) s.points.push_back(centre + rotation * (scale * (v - mean)));
+  s.triangles = mesh.triangles;
+  return s;
+}
+
+// A closed cube surface of edge `size` with n×n quads (2n² triangles) per face, outward.
+Shape cubeSurface(double size, int n, const Vec3& centre) {
+  Shape s;
+  std::map<std::array<long, 3>, int> index;  // lattice point → vertex
+  auto vertex = [&](const Eigen::Vector3i& q) {
+    const std::array<long, 3> key{q.x(), q.y(), q.z()};
+    const auto it = index.find(key);
+    if (it != index.end()) return it->second;
+    s.points.push_back(centre + size * (q.cast<double>() / n - Vec3::Constant(0.5)));
+    return index[key] = int(s.points.size()) - 1;
+  };
+  for (int axis = 0; axis < 3; ++axis)
+    for (int side = 0; side < 2; ++side) {
+      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+          auto at = [&](int a, int b) {
+            Eigen::Vector3i q;
+            q[axis] = side * n;
+            q[u] = a;
+            q[v] = b;
+            return vertex(q);
+          };
+          const int c00 = at(i, j), c10 = at(i + 1, j), c11 = at(i + 1, j + 1), c01 = at(i, j + 1);
+          // (u, v, axis) is right-handed: counter-clockwise in (u, v) faces +axis.
+          if (side == 1) {
+            s.triangles.push_back({c00, c10, c11});
+            s.triangles.push_back({c00, c11, c01});
+          } else {
+            s.triangles.push_back({c00, c11, c10});
+            s.triangles.push_back({c00, c01, c11});
+          }
+        }
+    }
+  return s;
+}
+
+BodyDef bodyFrom(const Shape& s, const std::string& name, Mode mode, double alpha) {
+  BodyDef def;
+  def.name = name;
+  def.positions = s.points;
+  def.surface = s.triangles;
+  def.params.mode = mode;
+  def.params.alpha = alpha;
+  def.params.beta = 0.5;
+  return def;
+}
+
+// Deepest particle of body a inside body b (metres), by winding number: independent of the
+// contact code. 0 when none is inside.
+double deepestInside(const World& w, BodyHandle a, BodyHandle b,
+                     const std::vector<Triangle>& bTriangles) {
+  const Eigen::MatrixX3d xa = test::toDouble(w.positions(a));
+  const Eigen::MatrixX3d xb = test::toDouble(w.positions(b));
+  double deepest = 0;
+  for (int i = 0; i < xa.rows(); ++i) {
+    const Vec3 p = xa.row(i).transpose();
+    if (std::abs(windingNumber(p, xb, bTriangles)) <= 0.5) continue;
+    double d = 1e30;
+    for (const Triangle& t : bTriangles)
+      d = std::min(d, pointTriangleDistance(p, xb.row(t[0]).transpose(), xb.row(t[1]).transpose(),
+                                            xb.row(t[2]).transpose()));
+    deepest = std::max(deepest, d);
+  }
+  return deepest;
+}
+
+Vec3 totalMomentum(const World& w) {
+  Vec3 p = Vec3::Zero();
+  for (BodyHandle b : w.bodies()) p += w.linearMomentum(b);
+  return p;
+}
+
+// ---- geometry kernels ----------------------------------------------------------------------
+
+TEST(SurfaceGeometry, ClosestPointMatchesExactDistance) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(-1, 1);
+  auto rnd = [&] { return Vec3f(u(rng), u(rng), u(rng)); };
+  for (int trial = 0; trial < 20000; ++trial) {
+    Vec3f a = rnd(), b = rnd(), c = rnd();
+    if (trial % 5 == 0) c = a + 0.999f * (b - a) + 1e-3f * rnd();  // needle triangles
+    const Vec3f p = 2.0f * rnd();
+    const TrianglePoint q = closestPointOnTriangle(p, a, b, c);
+    ASSERT_GE(q.weights.minCoeff(), 0.0f);
+    ASSERT_NEAR(q.weights.sum(), 1.0f, 1e-5f);
+    const Vec3f closest = q.weights[0] * a + q.weights[1] * b + q.weights[2] * c;
+    const double expected = pointTriangleDistance(p.cast<double>(), a.cast<double>(),
+                                                  b.cast<double>(), c.cast<double>());
+    ASSERT_NEAR((p - closest).norm(), expected, 1e-4) << "trial " << trial;
+    // The feature names the weights that are zero.
+    if (q.feature == TriangleFeature::Face) {
+      ASSERT_GT(q.weights.minCoeff(), 0.0f);
+    }
+    if (q.feature == TriangleFeature::Vertex1) {
+      ASSERT_EQ(q.weights[1], 1.0f);
+    }
+    if (q.feature == TriangleFeature::Edge1) {
+      ASSERT_EQ(q.weights[0], 0.0f);
+    }
+  }
+}
+
+TEST(SurfaceGeometry, PseudoNormalSideAgreesWithWindingNumber) {
+  const Shape s = bunnyCage(0.1, Vec3::Zero());
+  const int n = int(s.points.size());
+  Eigen::MatrixX3d xd(n, 3);
+  Eigen::Matrix<float, Eigen::Dynamic, 3> xf(n, 3);
+  for (int i = 0; i < n; ++i) {
+    xd.row(i) = s.points[size_t(i)].transpose();
+    xf.row(i) = s.points[size_t(i)].transpose().cast<float>();
+  }
+  const SurfaceTopology topology = buildSurfaceTopology(s.triangles, n);
+  for (const Triangle& t : topology.neighbours) ASSERT_GE(std::min({t[0], t[1], t[2]}), 0);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-0.7, 0.7);
+  std::normal_distribution<double> g(0.0, 0.01);
+  int inside = 0, tested = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    Vec3 p(u(rng), u(rng), u(rng));
+    if (trial % 2) {  // half of the points within about a centimetre of a random vertex
+      p = s.points[size_t(trial) % s.points.size()] + Vec3(g(rng), g(rng), g(rng));
+    }
+    const double w = windingNumber(p, xd, s.triangles);
+    if (std::abs(std::abs(w) - 0.5) < 0.05) continue;  // on the surface: no defined side
+    float best = 1e30f;
+    int bestT = -1;
+    TrianglePoint bestQ{};
+    Vec3f bestC = Vec3f::Zero();
+    const Vec3f pf = p.cast<float>();
+    for (size_t t = 0; t < s.triangles.size(); ++t) {
+      const Vec3f a = xf.row(s.triangles[t][0]), b = xf.row(s.triangles[t][1]),
+                  c = xf.row(s.triangles[t][2]);
+      const TrianglePoint q = closestPointOnTriangle(pf, a, b, c);
+      const Vec3f cp = q.weights[0] * a + q.weights[1] * b + q.weights[2] * c;
+      if ((pf - cp).squaredNorm() < best) {
+        best = (pf - cp).squaredNorm();
+        bestT = int(t);
+        bestQ = q;
+        bestC = cp;
+      }
+    }
+    if (std::sqrt(best) < 1e-4f) continue;  // too close to the surface for float to decide
+    const Vec3f side = pseudoNormal(s.triangles, topology, xf.col(0).data(), xf.col(1).data(),
+                                    xf.col(2).data(), bestT, bestQ.feature);
+    const bool pseudoInside = (pf - bestC).dot(side) < 0.0f;
+    ASSERT_EQ(pseudoInside, std::abs(w) > 0.5) << "point " << p.transpose() << " w " << w;
+    inside += pseudoInside;
+    ++tested;
+  }
+  EXPECT_GT(inside, tested / 10);  // both sides were exercised
+  EXPECT_LT(inside, tested - tested / 10);
+}
+
+TEST(SurfaceGrid, CellHoldsEveryTriangleWithinReach) {
+  const Shape s = bunnyCage(0.1, Vec3(3, 1, -2));
+  const int n = int(s.points.size());
+  Eigen::Matrix<float, Eigen::Dynamic, 3> x(n, 3);
+  for (int i = 0; i < n; ++i) x.row(i) = s.points[size_t(i)].transpose().cast<float>();
+  for (float reach : {0.01f, 0.07f, 0.3f}) {
+    SurfaceGrid grid;
+    Eigen::AlignedBox3f region(Vec3f(2.5f, 0.5f, -2.5f), Vec3f(3.2f, 1.2f, -1.6f));
+    grid.build(s.triangles, x.col(0).data(), x.col(1).data(), x.col(2).data(), reach, 0.1f, region);
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> u(0, 1);
+    for (int trial = 0; trial < 2000; ++trial) {
+      const Vec3f p = region.min() + Vec3f(u(rng), u(rng), u(rng)).cwiseProduct(region.sizes());
+      const SurfaceGrid::Range r = grid.candidates(p);
+      const std::vector<int> got(r.begin, r.end);
+      ASSERT_TRUE(std::is_sorted(got.begin(), got.end()));
+      for (size_t t = 0; t < s.triangles.size(); ++t) {
+        const double d = pointTriangleDistance(
+            p.cast<double>(), s.points[size_t(s.triangles[t][0])],
+            s.points[size_t(s.triangles[t][1])], s.points[size_t(s.triangles[t][2])]);
+        if (d <= reach * 0.999) {
+          ASSERT_TRUE(std::binary_search(got.begin(), got.end(), int(t)))
+              << "triangle " << t << " at " << d << " m, reach " << reach;
+        }
+      }
+    }
+  }
+}
+
+// ---- the World's contact response ----------------------------------------------------------
+
+// Two bodies fly into each other: no gravity, no colliders, so total momentum must stay what it
+// was; with friction 0 and with friction (tangential impulses are equal and opposite too).
+TEST(Contact, TwoBodyCollisionConservesMomentumAndSeparates) {
+  for (double friction : {0.0, 0.8}) {
+    for (Mode mode : {Mode::Rigid, Mode::Linear, Mode::Quadratic}) {
+      WorldSettings settings = test::noGravity(1.0 / 60, 4);
+      settings.contactFriction = friction;
+      World world(settings);
+      const Shape a = bunnyCage(0.1, Vec3(-0.7, 0, 0));
+      std::mt19937 rng(3);
+      const Shape b = bunnyCage(0.1, Vec3(0.7, 0.15, 0.1), test::randomRotation(rng));
+      BodyDef da = bodyFrom(a, "a", mode, 0.4), db = bodyFrom(b, "b", Mode::Linear, 0.3);
+      da.velocity = Vec3(3, 0, 0);
+      db.velocity = Vec3(-2, 0.5, 0);
+      da.totalMass = 2.0;
+      db.clusters.kind = ClusterDef::Kind::Grid;
+      db.clusters.cellSize = 0.4;
+      db.clusters.overlap = 0.1;
+      const BodyHandle ha = world.addBody(da), hb = world.addBody(db);
+      const Vec3 before = totalMomentum(world);
+      int contacts = 0;
+      double deepest = 0;
+      for (int step = 0; step < 90; ++step) {
+        world.step();
+        contacts += world.lastContactCount();
+        deepest = std::max(deepest, deepestInside(world, ha, hb, b.triangles));
+        deepest = std::max(deepest, deepestInside(world, hb, ha, a.triangles));
+        ASSERT_TRUE(world.takeEvents().empty());
+      }
+      const Vec3 after = totalMomentum(world);
+      SCOPED_TRACE(std::string(modeName(mode)) + " friction " + std::to_string(friction));
+      EXPECT_GT(contacts, 0);
+      // Float round-off only: a one-sided or wrongly weighted impulse changes it by ~1 kg·m/s.
+      EXPECT_LT((after - before).norm(), 1e-4 * before.norm()) << (after - before).transpose();
+      // They met instead of passing through: momentum was exchanged, a is still on its side.
+      EXPECT_GT((world.linearMomentum(ha) - Vec3(6, 0, 0)).norm(), 1.0);  // it was pushed
+      EXPECT_LT(world.centreOfMass(ha).x(), world.centreOfMass(hb).x());
+      // Penetration stays shallow during the whole impact (mean edge ≈ 0.14 m).
+      EXPECT_LT(deepest, 0.1 * 0.14);
+    }
+  }
+}
+
+// A fast small body hits a larger one: per sub-step it moves about one particle spacing, more
+// than a static thickness-based test would catch.
+TEST(Contact, FastBodyDoesNotTunnel) {
+  World world(test::noGravity(1.0 / 60, 4));
+  const Shape big = bunnyCage(0.12, Vec3::Zero());
+  const Shape small = bunnyCage(0.04, Vec3(-2.0, 0.05, 0));
+  BodyDef dBig = bodyFrom(big, "big", Mode::Linear, 0.5);
+  BodyDef dSmall = bodyFrom(small, "small", Mode::Rigid, 1.0);
+  dBig.totalMass = 5;
+  dSmall.velocity = Vec3(30, 0, 0);  // 0.125 m per sub-step
+  const BodyHandle hb = world.addBody(dBig), hs = world.addBody(dSmall);
+  double deepest = 0;
+  for (int step = 0; step < 30; ++step) {
+    world.step();
+    deepest = std::max(deepest, deepestInside(world, hs, hb, big.triangles));
+  }
+  EXPECT_LT(world.centreOfMass(hs).x(), world.centreOfMass(hb).x());  // stayed on its side
+  EXPECT_LT(world.linearMomentum(hs).x(), 0.0);                       // bounced back
+  EXPECT_LT(deepest, 0.05 * meanEdgeLength(small.triangles, small.points) + 0.02);
+}
+
+// A cube dropped on another on the floor comes to rest on top of it, still.
+TEST(Contact, StackSettlesWithoutJitter) {
+  WorldSettings settings;
+  settings.timeStep = 1.0 / 60;
+  settings.substeps = 4;
+  World world(settings);
+  world.addCollider(Collider::plane(Vec3::UnitY(), 0.0, 0.6));
+  const Shape bottom = cubeSurface(1.0, 4, Vec3(0, 0.5, 0));
+  const Shape top = cubeSurface(0.6, 4, Vec3(0.1, 1.6, 0.05));
+  for (Mode mode : {Mode::Rigid, Mode::Linear, Mode::Quadratic}) {
+    World w = world;
+    BodyDef db = bodyFrom(bottom, "bottom", Mode::Quadratic, 0.3);
+    BodyDef dt = bodyFrom(top, "top", mode, mode == Mode::Rigid ? 1.0 : 0.3);
+    db.totalMass = 2;
+    // Damping lets the two soft bodies' own vibration die out within the test's 3 s; with less
+    // they ring for longer (a property of the bodies, not of the contact).
+    db.params.damping = dt.params.damping = 0.1;
+    const BodyHandle hb = w.addBody(db), ht = w.addBody(dt);
+    for (int step = 0; step < 240; ++step) w.step();
+    const Eigen::MatrixX3d x0 = test::toDouble(w.positions(ht));
+    w.step();
+    const Eigen::MatrixX3d x1 = test::toDouble(w.positions(ht));
+    SCOPED_TRACE(modeName(mode));
+    EXPECT_LT((x1 - x0).rowwise().norm().maxCoeff(), 1e-3 * 0.6 * std::sqrt(3.0));
+    const double spacing = meanEdgeLength(top.triangles, top.points);
+    EXPECT_LT(deepestInside(w, ht, hb, bottom.triangles), 0.05 * spacing);
+    EXPECT_LT(deepestInside(w, hb, ht, top.triangles), 0.05 * spacing);
+    // Resting on the bottom cube (top face at 1 m), not on the floor beside it.
+    EXPECT_GT(x1.col(1).minCoeff(), 0.9);
+    EXPECT_GT(w.lastContactCount(), 0);
+  }
+}
+
+TEST(Contact, SameResultOnOneAndTwoThreads) {
+  auto run = [](int threads) {
+    setThreadCount(threads);
+    WorldSettings settings;
+    settings.substeps = 2;
+    World world(settings);
+    world.addCollider(Collider::plane(Vec3::UnitY(), 0.0));
+    for (int k = 0; k < 6; ++k) {
+      const Shape s = bunnyCage(0.08, Vec3(0.1 * (k % 2), 0.5 + 0.9 * k, 0.05 * k));
+      world.addBody(
+          bodyFrom(s, "b" + std::to_string(k), k % 2 ? Mode::Linear : Mode::Quadratic, 0.4));
+    }
+    int contacts = 0;
+    for (int step = 0; step < 150; ++step) {
+      world.step();
+      contacts += world.lastContactCount();
+    }
+    EXPECT_GT(contacts, 0);
+    setThreadCount(0);
+    return world.stateHash();
+  };
+  const std::uint64_t one = run(1);
+  EXPECT_EQ(one, run(1));
+  EXPECT_EQ(one, run(2));
+}
+
+TEST(Contact, SwitchedOffLetsBodiesPass) {
+  WorldSettings settings = test::noGravity(1.0 / 60, 2);
+  settings.bodyContact = false;
+  World world(settings);
+  BodyDef a = bodyFrom(bunnyCage(0.1, Vec3(-1, 0, 0)), "a", Mode::Rigid, 1.0);
+  BodyDef b = bodyFrom(bunnyCage(0.1, Vec3(1, 0, 0)), "b", Mode::Rigid, 1.0);
+  a.velocity = Vec3(3, 0, 0);
+  const BodyHandle ha = world.addBody(a), hb = world.addBody(b);
+  for (int step = 0; step < 60; ++step) world.step();
+  EXPECT_GT(world.centreOfMass(ha).x(), world.centreOfMass(hb).x());
+}
+
+TEST(Contact, BadSurfacesAreRejectedByName) {
+  World world;
+  const Shape s = bunnyCage(0.1, Vec3::Zero());
+  auto expectError = [&](const std::vector<Triangle>& triangles, const std::string& what) {
+    BodyDef def = bodyFrom(s, "bunny", Mode::Linear, 0.5);
+    def.surface = triangles;
+    try {
+      world.addBody(def);
+      ADD_FAILURE() << "accepted: " << what;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("surface"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+    EXPECT_TRUE(world.bodies().empty());  // nothing half-added
+  };
+  std::vector<Triangle> open = s.triangles;
+  open.pop_back();
+  expectError(open, "edge");
+  std::vector<Triangle> flipped = s.triangles;
+  std::swap(flipped[3][0], flipped[3][1]);
+  expectError(flipped, "triangle 3");
+  std::vector<Triangle> outOfRange = s.triangles;
+  outOfRange[0][2] = 9999;
+  expectError(outOfRange, "9999");
+  std::vector<Triangle> inward = s.triangles;
+  for (Triangle& t : inward) std::swap(t[0], t[1]);
+  expectError(inward, "inverted");
+}
+
+}  // namespace
+}  // namespace sb
