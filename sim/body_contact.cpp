@@ -179,4 +179,35 @@ void resolveContact(ContactBody& probe, ContactBody& obstacle, const Contact& co
   apply(impulse, 1);
 }
 
+void resolveStaticContact(ContactBody& body, int particle, const Vec3f& normal, float distance,
+                          float friction) {
+  const int p = particle;
+  const float share = body.rigidShare;
+  const float local = body.invMass[p];
+  const Vec3f r = body.position(p) - body.centre;
+  auto apply = [&](const Vec3f& J, int kind) {
+    float* const* arrays = kind == 0 ? body.x : body.v;
+    for (int a = 0; a < 3; ++a) arrays[a][p] += (1.0f - share) * local * J[a];
+    (kind == 0 ? body.shift : body.deltaV) += share * body.invTotalMass * J;
+    (kind == 0 ? body.turn : body.deltaW) += share * (body.invInertia * r.cross(J));
+  };
+  const float k = inverseMassAlong(body, local, r, normal);
+  if (!(k > 0.0f)) return;  // pinned
+  if (distance < 0.0f) apply((-distance / k) * normal, 0);
+
+  const Vec3f relative = body.velocity(p) + body.deltaV + body.deltaW.cross(r);
+  const float approach = relative.dot(normal);
+  if (!(approach < 0.0f)) return;
+  const float normalImpulse = -approach / k;
+  Vec3f impulse = normalImpulse * normal;
+  const Vec3f sliding = relative - approach * normal;
+  const float slide = sliding.norm();
+  if (slide > 0.0f && friction > 0.0f) {
+    const Vec3f t = sliding / slide;
+    const float kt = inverseMassAlong(body, local, r, t);
+    if (kt > 0.0f) impulse -= std::min(slide / kt, friction * normalImpulse) * t;
+  }
+  apply(impulse, 1);
+}
+
 }  // namespace sb

@@ -89,4 +89,18 @@ void findContacts(const ContactBody& probe, const ContactBody& obstacle, float h
 void resolveContact(ContactBody& probe, ContactBody& obstacle, const Contact& contact,
                     float friction);
 
+// Resolves a particle of `body` against an immovable surface (a static collider): `distance` is
+// the particle's signed distance to it at its current position including the gathered rigid
+// corrections (negative inside), `normal` the unit normal out of the collider there. The same
+// split between the particle and the body's rigid motion, the same normal and friction
+// impulses as resolveContact, with the other side immovable. friction ≥ 0.
+void resolveStaticContact(ContactBody& body, int particle, const Vec3f& normal, float distance,
+                          float friction);
+
+// The particle's position including the gathered rigid corrections (metres).
+inline Vec3f correctedPosition(const ContactBody& body, int particle) {
+  const Vec3f x = body.position(particle);
+  return x + body.shift + body.turn.cross(x - body.centre);
+}
+
 }  // namespace sb

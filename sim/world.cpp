@@ -297,6 +297,7 @@ struct ContactScratch {
   bool involved = false;               // meets some other body this sub-step
   SurfaceGrid grid;
   ContactBody view;  // set up by prepareContactBody for involved bodies
+  std::vector<std::pair<int, int>> staticContacts;  // (particle, collider) inside a collider
 };
 
 // A probe body whose particles are tested against an obstacle body's surface.
@@ -830,36 +831,38 @@ void World::Data::collideBodies(double h) {
 
 void World::Data::collide() {
   if (colliders.empty()) return;
-  const std::vector<ParticleBlock>& blocks = layout.blocks;
-  parallelFor(static_cast<int>(blocks.size()), layout.particles >= kMinParallelWork ? 2 : INT32_MAX,
-              [&](int i) {
-                const ParticleBlock& blk = blocks[size_t(i)];
-                BodyState& s = slots[size_t(blk.slot)].state;
-                for (int p = blk.begin; p < blk.end; ++p) {
-                  Vec3 x = s.x.row(p).transpose().cast<double>();
-                  Vec3 v = s.v.row(p).transpose().cast<double>();
-                  bool touched = false;
-                  for (const Collider& c : colliders) {
+  contactScratch.resize(slots.size());
+  // Bodies are independent here: each runs its own sweeps, so any thread split gives the same
+  // result. Like body–body contacts, a contact acts partly on the body's rigid motion (see
+  // sim/body_contact.h): a stiff body lands and rests as a whole instead of bouncing off the
+  // few particles that touch.
+  parallelFor(static_cast<int>(order.size()),
+              layout.particles >= kMinParallelBodyWork ? 2 : INT32_MAX, [&](int k) {
+                const int s = order[size_t(k)];
+                ContactScratch& cs = contactScratch[size_t(s)];
+                const BodyState& st = slots[size_t(s)].state;
+                cs.staticContacts.clear();
+                for (int p = 0; p < st.x.rows(); ++p) {
+                  const Vec3 x = st.x.row(p).transpose().cast<double>();
+                  for (size_t c = 0; c < colliders.size(); ++c) {
                     Vec3 n;
-                    const double d = colliderDistance(c, x, &n);
-                    if (!(d < 0.0)) continue;
-                    touched = true;
-                    x -= d * n;  // back onto the surface
-                    const double vn = v.dot(n);
-                    if (vn < 0.0) {
-                      Vec3 vt = v - vn * n;
-                      // Coulomb: tangential speed lost is at most μ times the normal speed removed.
-                      const double vtLen = vt.norm();
-                      const double loss = c.friction * -vn;
-                      vt = vtLen <= loss ? Vec3::Zero() : Vec3(vt * (1.0 - loss / vtLen));
-                      v = vt;
-                    }
-                  }
-                  if (touched) {
-                    s.x.row(p) = x.transpose().cast<float>();
-                    s.v.row(p) = v.transpose().cast<float>();
+                    if (colliderDistance(colliders[c], x, &n) < 0.0)
+                      cs.staticContacts.push_back({p, int(c)});
                   }
                 }
+                if (cs.staticContacts.empty()) return;
+                prepareContactBody(s);
+                ContactBody& view = cs.view;
+                for (int pass = 0; pass < kContactSweeps; ++pass)
+                  for (const auto& [p, c] : cs.staticContacts) {
+                    const Collider& collider = colliders[size_t(c)];
+                    Vec3 n;
+                    const double d =
+                        colliderDistance(collider, correctedPosition(view, p).cast<double>(), &n);
+                    resolveStaticContact(view, p, n.cast<float>(), float(std::min(d, 0.0)),
+                                         float(collider.friction));
+                  }
+                applyRigidResponse(view);
               });
 }
 

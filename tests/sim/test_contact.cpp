@@ -323,6 +323,46 @@ TEST(Contact, StackSettlesWithoutJitter) {
   }
 }
 
+// A stiff body dropped on the floor lands as a whole: the floor's impulse on the touching
+// particles reaches its rigid motion, so it does not bounce back up (when only the touching
+// particles were stopped, the rest carried on and the goals turned the projection into an
+// upward kick: it rebounded at ~45 % of its impact speed and wandered off by metres), and it
+// comes to rest near where it fell. (A softer body, α < 1, stores the impact as deformation and
+// bounces back elastically like a rubber ball; that is the shape-matching spring, not contact.)
+TEST(StaticContact, StiffBodyLandsWithoutBouncingOrWandering) {
+  WorldSettings settings;
+  settings.timeStep = 1.0 / 60;
+  settings.substeps = 4;
+  World world(settings);
+  world.addCollider(Collider::plane(Vec3::UnitY(), 0.0, 0.6));
+  const Shape s = bunnyCage(0.1, Vec3(0, 2.0, 0),
+                            Eigen::AngleAxisd(0.5, Vec3(1, 0, 1).normalized()).toRotationMatrix());
+  BodyDef def = bodyFrom(s, "bunny", Mode::Rigid, 1.0);
+  def.params.damping = 0.1;  // the particles' vibration about the rigid goals, not the motion
+  const BodyHandle b = world.addBody(def);
+  double impactSpeed = 0, reboundSpeed = 0;
+  bool landed = false;
+  Eigen::MatrixX3d previous;
+  for (int step = 0; step < 300; ++step) {
+    const double before = world.linearMomentum(b).y() / world.mass(b);
+    world.step();
+    const double vy = world.linearMomentum(b).y() / world.mass(b);
+    if (!landed && world.positions(b).col(1).minCoeff() < 1e-3) {
+      landed = true;
+      impactSpeed = -before;
+    }
+    if (landed) reboundSpeed = std::max(reboundSpeed, vy);
+    if (step == 298) previous = test::toDouble(world.positions(b));
+  }
+  ASSERT_TRUE(landed);
+  EXPECT_GT(impactSpeed, 4.0);
+  EXPECT_LT(reboundSpeed, 0.1 * impactSpeed);
+  const Vec3 c = world.centreOfMass(b);
+  EXPECT_LT(std::hypot(c.x(), c.z()), 1.2);  // it tips over its edge, but does not slide away
+  const Eigen::MatrixX3d x = test::toDouble(world.positions(b));
+  EXPECT_LT((x - previous).rowwise().norm().maxCoeff(), 1e-3);  // at rest (body ≈ 1 m)
+}
+
 TEST(Contact, SameResultOnOneAndTwoThreads) {
   auto run = [](int threads) {
     setThreadCount(threads);
