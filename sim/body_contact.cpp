@@ -11,8 +11,17 @@ void findContacts(const ContactBody& probe, const ContactBody& obstacle, float h
                   std::vector<Contact>& out) {
   const std::vector<Triangle>& tris = *obstacle.triangles;
   const SurfaceGrid& grid = *obstacle.grid;
+  // No particle moves further relative to the obstacle than this in the sub-step: particles
+  // outside the grid's bounds grown by it are skipped before any per-particle arithmetic.
+  const float maxExtra = h * (probe.maxRelativeSpeed +
+                              (probe.meanVelocity - obstacle.meanVelocity).norm() +
+                              obstacle.maxRelativeSpeed);
+  Eigen::AlignedBox3f near = grid.bounds();
+  near.min().array() -= maxExtra;
+  near.max().array() += maxExtra;
   for (int i = 0; i < probe.count; ++i) {
     const Vec3f p = probe.position(i);
+    if (!near.contains(p)) continue;
     const float extra =
         h * ((probe.velocity(i) - obstacle.meanVelocity).norm() + obstacle.maxRelativeSpeed);
     // Only triangles within reach + extra of p matter: a closest point farther than that might
