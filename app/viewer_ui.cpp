@@ -152,6 +152,11 @@ void ViewerApp::drawWorldPanel() {
   }
   if (ImGui::SliderInt("substeps", &s.substeps, 1, 20)) changed = true;
   tooltip("Sub-steps per time step: more = stiffer contacts and goals, more cost.");
+  if (ImGui::Checkbox("bodies collide", &s.bodyContact)) changed = true;
+  tooltip("Body-body contact: particles are kept out of the other bodies' cages.");
+  if (sliderDouble("body friction", &s.contactFriction, 0.0f, 2.0f, "%.2f",
+                   "Friction coefficient mu between bodies."))
+    changed = true;
   if (changed) {
     try {
       world.setSettings(s);
@@ -290,8 +295,8 @@ void ViewerApp::drawTimingPanel() {
   ImGui::Text("  external %.3f  goals %.3f  plastic %.3f", p.external * ms, p.goals * ms,
               p.plasticity * ms);
   ImGui::Text("  integrate %.3f  damping %.3f", p.integrate * ms, p.damping * ms);
-  ImGui::Text("  contacts %.3f  collide %.3f  check %.3f", p.contacts * ms, p.collide * ms,
-              p.check * ms);
+  ImGui::Text("  contacts %.3f (%d)  collide %.3f  check %.3f", p.contacts * ms,
+              scene_.world.lastContactCount(), p.collide * ms, p.check * ms);
   ImGui::Text("deform %.3f ms   render %.3f ms", timings_.lastDeform, timings_.lastRender);
   tooltip(
       "deform: render vertices = W x particles, plus smooth normals.\n"
