@@ -119,7 +119,7 @@ int runHeadlessCommand(int argc, char** argv) {
     contacts += scene.world.lastContactCount();
     if (!noDeform) {
       const auto t0 = std::chrono::steady_clock::now();
-      for (size_t i = 0; i < scene.bodies.size(); ++i) scene.renderVertices(int(i), meshes[i]);
+      scene.renderVerticesAll(meshes);
       deformSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     }
     for (const WorldEvent& e : scene.world.takeEvents())

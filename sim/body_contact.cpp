@@ -13,9 +13,11 @@ void findContacts(const ContactBody& probe, const ContactBody& obstacle, float h
   const SurfaceGrid& grid = *obstacle.grid;
   // No particle moves further relative to the obstacle than this in the sub-step: particles
   // outside the grid's bounds grown by it are skipped before any per-particle arithmetic.
-  const float maxExtra = h * (probe.maxRelativeSpeed +
-                              (probe.meanVelocity - obstacle.meanVelocity).norm() +
-                              obstacle.maxRelativeSpeed);
+  const float drift = obstacle.gridDrift;
+  const float maxExtra =
+      h * (probe.maxRelativeSpeed + (probe.meanVelocity - obstacle.meanVelocity).norm() +
+           obstacle.maxRelativeSpeed) +
+      drift;
   Eigen::AlignedBox3f near = grid.bounds();
   near.min().array() -= maxExtra;
   near.max().array() += maxExtra;
@@ -33,9 +35,12 @@ void findContacts(const ContactBody& probe, const ContactBody& obstacle, float h
     int bestTriangle = -1;
     TrianglePoint bestPoint{};
     Vec3f bestClosest = Vec3f::Zero();
-    grid.forEachCell(p, extra, [&](const SurfaceGrid::Range& range) {
+    // The grid and its triangle boxes are from positions up to `drift` old: look that much
+    // further, and a box may be that much closer than its triangle is now.
+    float bound = drift > 0.0f ? (reach + drift) * (reach + drift) : best;
+    grid.forEachCell(p, extra + drift, [&](const SurfaceGrid::Range& range) {
       for (const int* t = range.begin; t != range.end; ++t) {
-        if (grid.boxDistanceSquared(*t, p) > best) continue;  // cannot be closer
+        if (grid.boxDistanceSquared(*t, p) > bound) continue;  // cannot be closer
         const Triangle& tri = tris[size_t(*t)];
         const Vec3f a = obstacle.position(tri[0]), b = obstacle.position(tri[1]),
                     c = obstacle.position(tri[2]);
@@ -44,6 +49,7 @@ void findContacts(const ContactBody& probe, const ContactBody& obstacle, float h
         const float d2 = (p - closest).squaredNorm();
         if (d2 < best || (d2 == best && *t < bestTriangle)) {  // ties: lowest index, any order
           best = d2;
+          bound = drift > 0.0f ? (std::sqrt(d2) + drift) * (std::sqrt(d2) + drift) : d2;
           bestTriangle = *t;
           bestPoint = q;
           bestClosest = closest;

@@ -34,7 +34,10 @@ struct ContactBody {
   // The body's closed, outward-oriented surface; only needed when it is the obstacle.
   const std::vector<Triangle>* triangles = nullptr;
   const SurfaceTopology* topology = nullptr;  // buildSurfaceTopology(*triangles)
-  const SurfaceGrid* grid = nullptr;          // at the current positions
+  // The surface grid, built from earlier positions of the surface that every point has left by
+  // at most gridDrift metres (0: built from the current positions).
+  const SurfaceGrid* grid = nullptr;
+  float gridDrift = 0;
   float gap = 0;  // metres ≥ 0: separation contacts restore (keeps particles off the surface)
   Vec3f meanVelocity = Vec3f::Zero();  // m/s: velocity of the centre of mass this sub-step
   float maxRelativeSpeed = 0;          // m/s: fastest particle relative to meanVelocity

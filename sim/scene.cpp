@@ -1,5 +1,7 @@
 #include "sim/scene.h"
 
+#include "sim/parallel_for.h"
+
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdlib>
@@ -451,6 +453,13 @@ void Scene::renderVertices(int body, PointsRowMajor& out) const {
   } else {
     out = particles;
   }
+}
+
+void Scene::renderVerticesAll(std::vector<PointsRowMajor>& out) const {
+  out.resize(bodies.size());
+  // One body's mesh is too small to split (a few thousand vertices), many bodies are not.
+  parallelFor(static_cast<int>(bodies.size()), 2,
+              [&](int i) { renderVertices(i, out[size_t(i)]); });
 }
 
 const std::vector<std::array<int, 3>>& Scene::renderTriangles(int body) const {

@@ -33,6 +33,8 @@ constexpr long long kMinParallelBodyWork = 2048;
 // Separation body–body contacts restore, as a fraction of the obstacle's surface spacing: a
 // small positive gap keeps resting particles outside despite float round-off.
 constexpr float kContactGap = 0.01f;
+// An obstacle's contact grid is rebuilt once its surface has moved this many spacings.
+constexpr float kGridSlack = 0.25f;
 // Gauss–Seidel sweeps over a sub-step's body–body contacts.
 constexpr int kContactSweeps = 4;
 
@@ -297,6 +299,11 @@ struct ContactScratch {
   bool involved = false;               // meets some other body this sub-step
   SurfaceGrid grid;
   ContactBody view;  // set up by prepareContactBody for involved bodies
+  // The grid's surface positions and region when it was built, and whose it is (a slot can be
+  // reused by another body).
+  MatX3f gridPositions;
+  Eigen::AlignedBox3f gridRegion;
+  const BodyModel* gridModel = nullptr;
   std::vector<std::pair<int, int>> staticContacts;  // (particle, collider) inside a collider
 };
 
@@ -800,11 +807,25 @@ void World::Data::collideBodies(double h) {
     const BodyModel& m = *slots[size_t(s)].model;
     const MatX3f& x = slots[size_t(s)].state.x;
     ContactScratch& cs = contactScratch[size_t(s)];
-    // Cells of two spacings: a triangle grown by its reach (a quarter spacing) lands in at most
-    // 2×2×2 cells, and a cell holds a few dozen triangles (most rejected by their boxes).
-    const float reach = reachOf(s);
-    cs.grid.build(m.surface, x.col(0).data(), x.col(1).data(), x.col(2).data(), reach, m.spacing,
-                  cs.region);
+    // The grid is kept while the surface has moved less than a quarter spacing since it was
+    // built and the region still fits: lookups then widen by that drift (findContacts), so
+    // resting and slowly moving bodies skip the rebuild.
+    float drift = 0;
+    const bool reusable = cs.gridModel == &m && cs.gridRegion.contains(cs.region);
+    if (reusable) drift = std::sqrt((x - cs.gridPositions).rowwise().squaredNorm().maxCoeff());
+    if (!reusable || !(drift <= kGridSlack * m.spacing)) {
+      cs.gridRegion = cs.region;
+      cs.gridRegion.min().array() -= kGridSlack * m.spacing;
+      cs.gridRegion.max().array() += kGridSlack * m.spacing;
+      // Cells of one spacing: a triangle grown by its reach (a quarter spacing) lands in at most
+      // 3×3×3 cells, and a cell holds a dozen or two triangles (most rejected by their boxes).
+      cs.grid.build(m.surface, x.col(0).data(), x.col(1).data(), x.col(2).data(), reachOf(s),
+                    m.spacing, cs.gridRegion);
+      cs.gridPositions = x;
+      cs.gridModel = &m;
+      drift = 0;
+    }
+    cs.view.gridDrift = drift;
   });
 
   // Narrow phase reads only, so pairs run in parallel; contacts then resolve one after another
