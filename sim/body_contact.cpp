@@ -121,6 +121,26 @@ float inverseMassAlong(const ContactBody& b, float localInvMass, const Vec3f& r,
          b.rigidShare * (b.invTotalMass + rd.dot(b.invInertia * rd));
 }
 
+// The impulse on the first of two touching points (the second gets its opposite) that stops
+// their approach along unit n, whose effective inverse mass along n is k (> 0), and removes,
+// Coulomb-style, up to friction × that impulse of their sliding velocity; kAlong(t) is the
+// effective inverse mass along a unit tangent t. `relative` approaches: relative·n < 0.
+template <typename InverseMassAlong>
+Vec3f contactImpulse(const Vec3f& relative, const Vec3f& n, float k, float friction,
+                     const InverseMassAlong& kAlong) {
+  const float approach = relative.dot(n);
+  const float normalImpulse = -approach / k;
+  Vec3f impulse = normalImpulse * n;
+  const Vec3f sliding = relative - approach * n;
+  const float slide = sliding.norm();
+  if (slide > 0.0f && friction > 0.0f) {
+    const Vec3f t = sliding / slide;
+    const float kt = kAlong(t);
+    if (kt > 0.0f) impulse -= std::min(slide / kt, friction * normalImpulse) * t;
+  }
+  return impulse;
+}
+
 }  // namespace
 
 void resolveContact(ContactBody& probe, ContactBody& obstacle, const Contact& contact,
@@ -179,19 +199,13 @@ void resolveContact(ContactBody& probe, ContactBody& obstacle, const Contact& co
   // Velocities: no approach along the normal, then Coulomb friction on the sliding part.
   const Vec3f relative = (probe.velocity(p) + probe.deltaV + probe.deltaW.cross(rp)) -
                          (vo + obstacle.deltaV + obstacle.deltaW.cross(ro));
-  const float approach = relative.dot(n);
-  if (!(approach < 0.0f)) return;
-  const float normalImpulse = -approach / k;
-  Vec3f impulse = normalImpulse * n;
-  const Vec3f sliding = relative - approach * n;
-  const float slide = sliding.norm();
-  if (slide > 0.0f && friction > 0.0f) {
-    const Vec3f t = sliding / slide;
-    const float kt =
-        inverseMassAlong(probe, localP, rp, t) + inverseMassAlong(obstacle, localO, ro, t);
-    if (kt > 0.0f) impulse -= std::min(slide / kt, friction * normalImpulse) * t;
-  }
-  apply(impulse, 1);
+  if (!(relative.dot(n) < 0.0f)) return;  // separating or resting
+  apply(contactImpulse(relative, n, k, friction,
+                       [&](const Vec3f& t) {
+                         return inverseMassAlong(probe, localP, rp, t) +
+                                inverseMassAlong(obstacle, localO, ro, t);
+                       }),
+        1);
 }
 
 void resolveStaticContact(ContactBody& body, int particle, const Vec3f& normal, float distance,
@@ -211,18 +225,10 @@ void resolveStaticContact(ContactBody& body, int particle, const Vec3f& normal, 
   if (distance < 0.0f) apply((-distance / k) * normal, 0);
 
   const Vec3f relative = body.velocity(p) + body.deltaV + body.deltaW.cross(r);
-  const float approach = relative.dot(normal);
-  if (!(approach < 0.0f)) return;
-  const float normalImpulse = -approach / k;
-  Vec3f impulse = normalImpulse * normal;
-  const Vec3f sliding = relative - approach * normal;
-  const float slide = sliding.norm();
-  if (slide > 0.0f && friction > 0.0f) {
-    const Vec3f t = sliding / slide;
-    const float kt = inverseMassAlong(body, local, r, t);
-    if (kt > 0.0f) impulse -= std::min(slide / kt, friction * normalImpulse) * t;
-  }
-  apply(impulse, 1);
+  if (!(relative.dot(normal) < 0.0f)) return;  // separating or resting
+  apply(contactImpulse(relative, normal, k, friction,
+                       [&](const Vec3f& t) { return inverseMassAlong(body, local, r, t); }),
+        1);
 }
 
 }  // namespace sb

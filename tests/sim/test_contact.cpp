@@ -108,6 +108,16 @@ double deepestInside(const World& w, BodyHandle a, BodyHandle b,
   return deepest;
 }
 
+// Gravity, 1/60 s in four sub-steps, a floor at y = 0 with friction 0.6.
+World floorWorld() {
+  WorldSettings settings;
+  settings.timeStep = 1.0 / 60;
+  settings.substeps = 4;
+  World world(settings);
+  world.addCollider(Collider::plane(Vec3::UnitY(), 0.0, 0.6));
+  return world;
+}
+
 Vec3 totalMomentum(const World& w) {
   Vec3 p = Vec3::Zero();
   for (BodyHandle b : w.bodies()) p += w.linearMomentum(b);
@@ -292,11 +302,7 @@ TEST(Contact, FastBodyDoesNotTunnel) {
 
 // A cube dropped on another on the floor comes to rest on top of it, still.
 TEST(Contact, StackSettlesWithoutJitter) {
-  WorldSettings settings;
-  settings.timeStep = 1.0 / 60;
-  settings.substeps = 4;
-  World world(settings);
-  world.addCollider(Collider::plane(Vec3::UnitY(), 0.0, 0.6));
+  World world = floorWorld();
   const Shape bottom = cubeSurface(1.0, 4, Vec3(0, 0.5, 0));
   const Shape top = cubeSurface(0.6, 4, Vec3(0.1, 1.6, 0.05));
   for (Mode mode : {Mode::Rigid, Mode::Linear, Mode::Quadratic}) {
@@ -330,11 +336,7 @@ TEST(Contact, StackSettlesWithoutJitter) {
 // comes to rest near where it fell. (A softer body, α < 1, stores the impact as deformation and
 // bounces back elastically like a rubber ball; that is the shape-matching spring, not contact.)
 TEST(StaticContact, StiffBodyLandsWithoutBouncingOrWandering) {
-  WorldSettings settings;
-  settings.timeStep = 1.0 / 60;
-  settings.substeps = 4;
-  World world(settings);
-  world.addCollider(Collider::plane(Vec3::UnitY(), 0.0, 0.6));
+  World world = floorWorld();
   const Shape s = bunnyCage(0.1, Vec3(0, 2.0, 0),
                             Eigen::AngleAxisd(0.5, Vec3(1, 0, 1).normalized()).toRotationMatrix());
   BodyDef def = bodyFrom(s, "bunny", Mode::Rigid, 1.0);
