@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
@@ -184,7 +185,12 @@ ClusterDef parseClusters(Fields& f) {
   return d;
 }
 
-SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def) {
+// Render meshes already bound while loading one scene, by (cage file, render file, render path
+// as written): bodies that use the same pair share one embedding, so 50 copies of a bunny hold
+// one weight matrix (and the deform reads it from cache instead of memory).
+using BoundMeshes = std::map<std::array<std::string, 3>, std::shared_ptr<RenderMesh>>;
+
+SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMeshes& bound) {
   SceneBody sb;
   const std::string defaultName = "body";
   def.name = f.text("name", &defaultName);
@@ -244,7 +250,11 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def) {
   // The cage is the body's surface for body–body contact (the World checks it is closed).
   if (sb.contact) def.surface = mesh.triangles;
 
-  if (!renderPath.empty()) {
+  const std::array<std::string, 3> renderKey{resolve(baseDir, sb.meshPath),
+                                             resolve(baseDir, renderPath), renderPath};
+  if (!renderPath.empty() && bound.count(renderKey)) {
+    sb.render = bound.at(renderKey);
+  } else if (!renderPath.empty()) {
     cage::TriangleMesh detail;
     try {
       detail = cage::readMesh(resolve(baseDir, renderPath));
@@ -265,6 +275,7 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def) {
     } catch (const std::exception& e) {
       f.fail("mesh", std::string("cannot bind the render mesh to this cage: ") + e.what());
     }
+    bound[renderKey] = render;
     sb.render = std::move(render);
   }
   return sb;
@@ -312,11 +323,12 @@ Scene parseScene(const std::string& text, const std::string& name, const std::st
   const json& bodies = top.raw("bodies");
   if (!bodies.is_array()) top.fail("bodies", "must be an array");
   top.rejectUnknown();
+  BoundMeshes bound;
   for (size_t i = 0; i < bodies.size(); ++i) {
     const std::string where = "bodies[" + std::to_string(i) + "]";
     Fields b(bodies[i], where, name);
     BodyDef def;
-    SceneBody body = parseBody(b, baseDir, def);
+    SceneBody body = parseBody(b, baseDir, def, bound);
     try {
       body.handle = scene.world.addBody(def);
     } catch (const std::invalid_argument& e) {

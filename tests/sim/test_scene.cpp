@@ -56,6 +56,11 @@ TEST(Scene, DefaultSceneLoadsWithBoundRenderMeshes) {
     EXPECT_LT(worst, 1e-4) << i;
     EXPECT_FALSE(scene.renderTriangles(int(i)).empty());
   }
+  // The two bunnies (same cage and render files, different placements) share one binding, and
+  // the check above shows it serves both placements.
+  EXPECT_EQ(scene.bodies[0].meshPath, scene.bodies[2].meshPath);
+  EXPECT_EQ(scene.bodies[0].render, scene.bodies[2].render);
+  EXPECT_NE(scene.bodies[0].render, scene.bodies[1].render);
 }
 
 TEST(Scene, ErrorsNameFileFieldAndReason) {
