@@ -23,8 +23,8 @@ namespace sb {
 // keeps most of its momentum and its goals drag the touched particles back in, so it sinks into
 // or tunnels through the other body. So each contact's correction and impulse go a fraction
 // `rigidShare` (the World uses α) to the body's rigid motion — as if it were a rigid body with
-// its mass and inertia — and the rest to the touched particles. Both parts conserve linear and
-// angular momentum.
+// its mass and inertia — and the rest to the touched particles. Both parts conserve linear
+// momentum exactly, and angular momentum up to the small gap between the two touching points.
 struct ContactBody {
   float* x[3] = {nullptr, nullptr, nullptr};  // position columns (#P each), metres
   float* v[3] = {nullptr, nullptr, nullptr};  // velocity columns (#P each), m/s

@@ -8,7 +8,7 @@
 //               x += h·v  (Müller et al. 2005: stable for every h when α ≤ 1)
 //   Damping     damp velocity relative to each body's rigid motion (bodies with damping only)
 //   Contacts    particles pushed out of other bodies' surfaces, friction (sim/body_contact.h)
-//   Collide     push particles out of static colliders, friction
+//   Collide     the same against the static colliders (partly through each body's rigid motion)
 //   Check       bodies with NaN/Inf are reset to their start and reported as events
 // Results depend only on the input and never on the thread count: every sum is formed in a
 // fixed order over fixed-size blocks.
