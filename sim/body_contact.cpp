@@ -3,7 +3,7 @@
 #include <cmath>
 #include <limits>
 
-#include "sim/cluster_rest.h"
+#include "sim/mass_properties.h"
 
 namespace sb {
 
@@ -76,21 +76,10 @@ void findContacts(const ContactBody& probe, const ContactBody& obstacle, float h
 }
 
 void prepareRigidResponse(ContactBody& body, float rigidShare) {
-  double total = 0;
-  Vec3 centre = Vec3::Zero();
-  for (int i = 0; i < body.count; ++i) {
-    total += body.mass[i];
-    centre += double(body.mass[i]) * body.position(i).cast<double>();
-  }
-  centre /= total;
-  Mat3 inertia = Mat3::Zero();
-  for (int i = 0; i < body.count; ++i) {
-    const Vec3 r = body.position(i).cast<double>() - centre;
-    inertia += double(body.mass[i]) * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
-  }
-  body.centre = centre.cast<float>();
-  body.invTotalMass = float(1.0 / total);
-  body.invInertia = symmetricPseudoInverse<3>(inertia, 1e-9).cast<float>();
+  const MassProperties mp = massProperties(body.x[0], body.x[1], body.x[2], body.mass, body.count);
+  body.centre = mp.centre.cast<float>();
+  body.invTotalMass = float(1.0 / mp.mass);
+  body.invInertia = mp.inverseInertia.cast<float>();
   body.rigidShare = rigidShare;
   body.shift = body.turn = body.deltaV = body.deltaW = Vec3f::Zero();
 }
@@ -191,7 +180,7 @@ void resolveContact(ContactBody& probe, ContactBody& obstacle, const Contact& co
   if (!(k > 0.0f)) return;  // everything involved is pinned
 
   // Positions: push apart along the normal until the gap is restored.
-  const Vec3f xpNow = xp + probe.shift + probe.turn.cross(rp);
+  const Vec3f xpNow = correctedPosition(probe, p);
   const Vec3f xoNow = xo + obstacle.shift + obstacle.turn.cross(ro);
   const float violation = (xpNow - xoNow).dot(n) - obstacle.gap;
   if (violation < 0.0f) apply((-violation / k) * n, 0);

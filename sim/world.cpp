@@ -12,6 +12,7 @@
 #include "sim/cage/cage_validation.h"
 #include "sim/cluster_layout.h"
 #include "sim/cluster_rest.h"
+#include "sim/mass_properties.h"
 #include "sim/parallel_for.h"
 #include "sim/plasticity.h"
 #include "sim/shape_matching.h"
@@ -334,6 +335,9 @@ struct World::Data {
   std::vector<ContactScratch> contactScratch;  // per slot
   std::vector<ContactPair> contactPairs;
   std::vector<std::vector<Contact>> pairContacts;  // per pair
+  // Bodies in sweep order, grown boxes and creation rank per slot, obstacle and involved slots.
+  std::vector<int> contactSweep, contactRank, contactObstacles, contactInvolved;
+  std::vector<Eigen::AlignedBox3f> contactBoxes;
   int contactCount = 0;
 
   BodySlot& slot(BodyHandle h) {
@@ -651,21 +655,19 @@ void World::Data::damp() {
                 MatX3f& v = b.state.v;
                 const int n = m.particleCount();
                 // Fit the rigid motion (linear and angular velocity) that has the body's momenta.
-                Vec3 xc = Vec3::Zero(), vc = Vec3::Zero();
-                for (int i = 0; i < n; ++i) {
-                  xc += double(m.mass[i]) * x.row(i).transpose().cast<double>();
+                const MassProperties mp = massProperties(x.col(0).data(), x.col(1).data(),
+                                                         x.col(2).data(), m.mass.data(), n);
+                const Vec3 xc = mp.centre;
+                Vec3 vc = Vec3::Zero();
+                for (int i = 0; i < n; ++i)
                   vc += double(m.mass[i]) * v.row(i).transpose().cast<double>();
-                }
-                xc /= m.totalMass;
                 vc /= m.totalMass;
                 Vec3 L = Vec3::Zero();
-                Mat3 I = Mat3::Zero();
                 for (int i = 0; i < n; ++i) {
                   const Vec3 r = x.row(i).transpose().cast<double>() - xc;
                   L += double(m.mass[i]) * r.cross(v.row(i).transpose().cast<double>());
-                  I += double(m.mass[i]) * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
                 }
-                const Vec3 omega = symmetricPseudoInverse<3>(I, 1e-9) * L;
+                const Vec3 omega = mp.inverseInertia * L;
                 const double kd = b.params.damping;
                 for (int i = 0; i < n; ++i) {
                   const Vec3 r = x.row(i).transpose().cast<double>() - xc;
@@ -746,10 +748,13 @@ void World::Data::collideBodies(double h) {
   };
 
   // Broad phase: sweep over the grown boxes sorted along x; pairs come out in creation order.
-  std::vector<int> sweep(order.begin(), order.end());
-  std::vector<Eigen::AlignedBox3f> boxes(slots.size());
+  std::vector<int>& sweep = contactSweep;
+  std::vector<Eigen::AlignedBox3f>& boxes = contactBoxes;
+  std::vector<int>& rank = contactRank;
+  sweep.assign(order.begin(), order.end());
+  boxes.resize(slots.size());
   for (int s : order) boxes[size_t(s)] = grown(s);
-  std::vector<int> rank(slots.size());
+  rank.resize(slots.size());
   for (size_t k = 0; k < order.size(); ++k) rank[size_t(order[k])] = int(k);
   std::sort(sweep.begin(), sweep.end(), [&](int a, int b) {
     const float ma = boxes[size_t(a)].min().x(), mb = boxes[size_t(b)].min().x();
@@ -781,7 +786,10 @@ void World::Data::collideBodies(double h) {
   if (contactPairs.empty()) return;
 
   // Each obstacle's grid covers only where its probes' particles are.
-  std::vector<int> obstacles, involved;
+  std::vector<int>& obstacles = contactObstacles;
+  std::vector<int>& involved = contactInvolved;
+  obstacles.clear();
+  involved.clear();
   for (const ContactPair& p : contactPairs) {
     ContactScratch& cs = contactScratch[size_t(p.obstacle)];
     if (!cs.obstacle) {

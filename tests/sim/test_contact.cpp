@@ -11,6 +11,7 @@
 #include "scene_checks.h"
 #include "sim/body_contact.h"
 #include "sim/cage/mesh_io.h"
+#include "sim/mass_properties.h"
 #include "sim/parallel.h"
 #include "sim/surface_geometry.h"
 #include "sim/surface_grid.h"
@@ -232,6 +233,32 @@ TEST(SurfaceGrid, CellHoldsEveryTriangleWithinReach) {
       }
     }
   }
+}
+
+// Closed forms: eight 1 kg masses at the corners (±1, ±1, ±1) + c have their centre at c and
+// inertia 16·I (each contributes r² − rᵢ² = 2 per axis); two 1 kg masses at x = c ± 1 are
+// collinear: inertia diag(0, 2, 2), and the pseudo-inverse inverts it where it can.
+TEST(MassProperties, ClosedForms) {
+  const Vec3 c(0.5, -2, 3);
+  std::vector<float> x, y, z, m;
+  for (int k = 0; k < 8; ++k) {
+    x.push_back(float(c.x() + (k & 1 ? 1 : -1)));
+    y.push_back(float(c.y() + (k & 2 ? 1 : -1)));
+    z.push_back(float(c.z() + (k & 4 ? 1 : -1)));
+    m.push_back(1.0f);
+  }
+  const MassProperties cube = massProperties(x.data(), y.data(), z.data(), m.data(), 8);
+  EXPECT_DOUBLE_EQ(cube.mass, 8.0);
+  EXPECT_LT((cube.centre - c).norm(), 1e-12);
+  EXPECT_LT((cube.inertia - 16.0 * Mat3::Identity()).norm(), 1e-10);
+  EXPECT_LT((cube.inverseInertia - Mat3::Identity() / 16.0).norm(), 1e-12);
+
+  const float lx[2] = {float(c.x() - 1), float(c.x() + 1)};
+  const float ly[2] = {float(c.y()), float(c.y())}, lz[2] = {float(c.z()), float(c.z())};
+  const float lm[2] = {1.0f, 1.0f};
+  const MassProperties line = massProperties(lx, ly, lz, lm, 2);
+  EXPECT_LT((line.inertia - Vec3(0, 2, 2).asDiagonal().toDenseMatrix()).norm(), 1e-12);
+  EXPECT_LT((line.inverseInertia - Vec3(0, 0.5, 0.5).asDiagonal().toDenseMatrix()).norm(), 1e-9);
 }
 
 // ---- the World's contact response ----------------------------------------------------------
