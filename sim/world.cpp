@@ -10,6 +10,7 @@
 
 #include "sim/body_contact.h"
 #include "sim/cage/cage_validation.h"
+#include "sim/cluster_batch.h"
 #include "sim/cluster_layout.h"
 #include "sim/cluster_rest.h"
 #include "sim/mass_properties.h"
@@ -24,11 +25,15 @@ namespace {
 using MatX3f = Eigen::Matrix<float, Eigen::Dynamic, 3>;
 using Clock = std::chrono::steady_clock;
 
-constexpr int kMembersPerTask = 8192;     // cluster members per moment task
-constexpr int kParticlesPerBlock = 4096;  // particles per integration/collision block
+constexpr int kMembersPerTask = 8192;             // cluster members per moment task
+constexpr int kParticlesPerBlock = 4096;          // particles per integration/collision block
+constexpr int kClusteredParticlesPerBlock = 128;  // the same for bodies with several clusters
 // Below this many particles (or cluster members) a phase runs on one thread: fork/join would
 // cost more than it saves.
 constexpr long long kMinParallelWork = 16384;
+// Integration forks from this many particles plus cluster memberships: below, the goal sums of
+// clustered bodies still gain from reading goals where the Goals phase wrote them.
+constexpr long long kMinParallelIntegration = 8192;
 // Per-body phases (damping, contacts) fork only in worlds with at least this many particles.
 constexpr long long kMinParallelBodyWork = 2048;
 // Separation body–body contacts restore, as a fraction of the obstacle's surface spacing: a
@@ -94,6 +99,8 @@ struct BodyModel {
   std::vector<MomentTask> tasks;  // in cluster order
   std::vector<int> taskStart;     // tasks of cluster c: taskStart[c] .. taskStart[c+1]
   bool wholeBodyCluster = false;  // exactly one cluster holding every particle in order
+  // Clusters of at most kBatchMaxMembers members, eight per batch (cluster_batch.h).
+  std::vector<ClusterBatch> batches;
   // Body–body contact: the closed surface (may be empty) and its adjacency, the
   // surface's mean edge length at rest (m) and the inverse masses contacts use (0 = pinned).
   std::vector<Triangle> surface;
@@ -111,12 +118,23 @@ struct BodyState {
   std::vector<ClusterShape> shape;           // derived from Sᵖ
   std::vector<Eigen::Quaterniond> rotation;  // warm start of the rotation extraction
   std::vector<Eigen::Vector3f> ref;          // last centre of mass: reference for float sums
-  std::vector<GoalTransform> goal;           // per cluster, written by the Goals phase
-  // The linear part of each goal packed as rows [L | t] (12 floats, SIMD-aligned): the
-  // per-membership sum in the integration of clustered bodies is three vector adds.
+  // Each cluster's goal transform (GoalTransform), written by the Goals phase: the linear part
+  // packed as rows [L | t] (12 floats, SIMD-aligned: the per-membership sum in the integration
+  // of clustered bodies is three vector adds) and the quadratic part Q (zero outside quadratic
+  // mode). Kept apart so the common linear case writes and reads one cache line per cluster.
   std::vector<Eigen::Matrix<float, 12, 1>, Eigen::aligned_allocator<Eigen::Matrix<float, 12, 1>>>
       goalRows;
+  std::vector<Eigen::Matrix<float, 3, 6>> goalQuad;
+  // Per batch of the model: Sᵖ-dependent data in lanes, and whether it lags behind Sᵖ.
+  std::vector<ClusterBatchShape> batchShape;
+  bool batchShapeStale = true;
 };
+
+// Whether a body's small clusters go through the batched kernel: rigid and linear bodies
+// without plastic flow (a plastic update is a per-cluster decision with its own re-fit).
+bool usesBatches(const BodyModel& m, const BodyParams& p) {
+  return !m.batches.empty() && p.mode != Mode::Quadratic && !p.plasticity.enabled();
+}
 
 struct BodySlot {
   std::uint32_t generation = 0;
@@ -213,14 +231,29 @@ std::shared_ptr<BodyModel> buildModel(const BodyDef& def, const ClusterDef& clus
       m->memberWeight[k] = m->matchWeight[i];
     }
   }
+  const float* memberRest[3] = {m->memberRest.col(0).data(), m->memberRest.col(1).data(),
+                                m->memberRest.col(2).data()};
+  m->batches = buildClusterBatches(m->memberStart, m->members, memberRest, m->memberWeight.data(),
+                                   m->clusterRest);
   return m;
 }
 
-void packGoalRows(const GoalTransform& T, Eigen::Matrix<float, 12, 1>& rows) {
+void storeGoal(const GoalTransform& T, BodyState& s, size_t c) {
   for (int a = 0; a < 3; ++a) {
-    for (int j = 0; j < 3; ++j) rows[4 * a + j] = T.L(a, j);
-    rows[4 * a + 3] = T.t[a];
+    for (int j = 0; j < 3; ++j) s.goalRows[c][4 * a + j] = T.L(a, j);
+    s.goalRows[c][4 * a + 3] = T.t[a];
   }
+  s.goalQuad[c] = T.Q;
+}
+
+GoalTransform goalOf(const BodyState& s, size_t c) {
+  GoalTransform T;
+  for (int a = 0; a < 3; ++a) {
+    for (int j = 0; j < 3; ++j) T.L(a, j) = s.goalRows[c][4 * a + j];
+    T.t[a] = s.goalRows[c][4 * a + 3];
+  }
+  T.Q = s.goalQuad[c];
+  return T;
 }
 
 // Cluster state for the current positions: identity plastic state, goals = rest shape placed at
@@ -231,8 +264,8 @@ void resetClusterState(const BodyModel& m, BodyState& s) {
   s.shape.resize(nc);
   s.rotation.assign(nc, Eigen::Quaterniond::Identity());
   s.ref.resize(nc);
-  s.goal.assign(nc, GoalTransform{});
   s.goalRows.resize(nc);
+  s.goalQuad.resize(nc);
   for (size_t c = 0; c < nc; ++c) {
     s.shape[c] = deriveClusterShape(m.clusterRest[c], Mat3::Identity(), false);
     Vec3 centre = Vec3::Zero();
@@ -243,10 +276,12 @@ void resetClusterState(const BodyModel& m, BodyState& s) {
       mass += m.matchWeight[i];
     }
     s.ref[c] = (centre / mass).cast<float>();
-    s.goal[c].L.setIdentity();
-    s.goal[c].t = m.origin.cast<float>();
-    packGoalRows(s.goal[c], s.goalRows[c]);
+    GoalTransform restGoal;
+    restGoal.t = m.origin.cast<float>();
+    storeGoal(restGoal, s, c);
   }
+  s.batchShape.resize(m.batches.size());
+  s.batchShapeStale = true;
 }
 
 void resetBodyState(const BodyModel& m, BodyState& s) {
@@ -280,11 +315,19 @@ struct GlobalCluster {
   int firstTask;
 };
 
+// A batch of small clusters of some body; the body's tasks start at firstTask in the world's list.
+struct GlobalBatch {
+  int slot;
+  int batch;
+  int firstTask;
+};
+
 // The work lists of one step, rebuilt only when bodies or clusters change.
 struct WorkLayout {
   std::vector<GlobalTask> tasks;
   std::vector<int> splitTasks;  // tasks of clusters with several tasks (summed in a first pass)
-  std::vector<GlobalCluster> clusters;
+  std::vector<GlobalCluster> clusters;  // clusters not in a batch
+  std::vector<GlobalBatch> batches;
   std::vector<ParticleBlock> blocks;
   long long members = 0, particles = 0;
 };
@@ -331,7 +374,7 @@ struct World::Data {
   // Scratch reused every sub-step (no allocations in the loop).
   std::vector<ClusterMoments> partial;
   std::vector<double> plasticSeconds;
-  std::vector<char> clusterBad, blockBad, bad;
+  std::vector<char> clusterBad, batchBad, blockBad, bad;
   std::vector<ContactScratch> contactScratch;  // per slot
   std::vector<ContactPair> contactPairs;
   std::vector<std::vector<Contact>> pairContacts;  // per pair
@@ -419,48 +462,112 @@ void World::Data::computeGoals(double h, std::vector<char>& badBodies, StepProfi
   const int minParallelTasks = layout.members >= kMinParallelWork ? 2 : INT32_MAX;
   parallelFor(static_cast<int>(split.size()), minParallelTasks,
               [&](int k) { partial[size_t(split[size_t(k)])] = taskMoments(split[size_t(k)]); });
-  // Per cluster: sum its tasks in order, fit, plastic flow, goal transform.
+  // Per cluster: sum its tasks in order, fit, plastic flow, goal transform. Returns true when
+  // the cluster produced NaN/Inf; adds the time spent in plastic flow to *plasticTime.
+  auto updateCluster = [&](int slotIndex, size_t c, int firstTask, double* plasticTime) {
+    BodySlot& b = slots[size_t(slotIndex)];
+    const BodyModel& m = *b.model;
+    BodyState& s = b.state;
+    const int taskCount = m.taskStart[c + 1] - m.taskStart[c];
+    ClusterMoments& sum = partial[size_t(firstTask)];  // tasks of a cluster summed in order
+    if (taskCount == 1) sum = taskMoments(firstTask);
+    for (int t = 1; t < taskCount; ++t) sum += partial[size_t(firstTask + t)];
+    const Eigen::Vector3f ref = s.ref[c];
+    const bool quadratic = b.params.mode == Mode::Quadratic;
+    if (quadratic && !s.shape[c].hasQuadratic)  // switched to quadratic since the last derive
+      s.shape[c] = deriveClusterShape(m.clusterRest[c], s.plastic[c], true);
+    ClusterFit fit =
+        fitCluster(sum, ref, m.clusterRest[c], s.shape[c], s.plastic[c], s.rotation[c]);
+    if (!fit.finite) return true;
+    if (b.params.plasticity.enabled()) {
+      const auto tp = Clock::now();
+      const Mat3 R = fit.rotation.matrix();
+      const Mat3 stretch = R.transpose() * fit.linear;
+      if (updatePlasticDeformation(0.5 * (stretch + stretch.transpose()), h, b.params.plasticity,
+                                   s.plastic[c])) {
+        s.shape[c] = deriveClusterShape(m.clusterRest[c], s.plastic[c], quadratic);
+        fit = fitCluster(sum, ref, m.clusterRest[c], s.shape[c], s.plastic[c], fit.rotation);
+      }
+      *plasticTime += secondsSince(tp);
+    }
+    s.rotation[c] = fit.rotation;
+    s.ref[c] = fit.centre.cast<float>();
+    const GoalTransform goal =
+        goalTransform(fit, sum, m.clusterRest[c], s.shape[c], s.plastic[c], b.params);
+    storeGoal(goal, s, c);
+    return !goal.L.allFinite() || !goal.Q.allFinite() || !goal.t.allFinite();
+  };
   plasticSeconds.assign(clusters.size(), 0.0);
   clusterBad.assign(clusters.size(), 0);
   parallelFor(
       static_cast<int>(clusters.size()), clusters.size() >= 512 ? 2 : INT32_MAX, [&](int i) {
         const GlobalCluster& gc = clusters[size_t(i)];
-        BodySlot& b = slots[size_t(gc.slot)];
-        const BodyModel& m = *b.model;
-        BodyState& s = b.state;
-        const size_t c = size_t(gc.cluster);
-        const int taskCount = m.taskStart[c + 1] - m.taskStart[c];
-        ClusterMoments& sum = partial[size_t(gc.firstTask)];  // tasks of a cluster summed in order
-        if (taskCount == 1) sum = taskMoments(gc.firstTask);
-        for (int t = 1; t < taskCount; ++t) sum += partial[size_t(gc.firstTask + t)];
-        const Eigen::Vector3f ref = s.ref[c];
-        const bool quadratic = b.params.mode == Mode::Quadratic;
-        if (quadratic && !s.shape[c].hasQuadratic)  // switched to quadratic since the last derive
-          s.shape[c] = deriveClusterShape(m.clusterRest[c], s.plastic[c], true);
-        ClusterFit fit =
-            fitCluster(sum, ref, m.clusterRest[c], s.shape[c], s.plastic[c], s.rotation[c]);
-        if (!fit.finite) {
-          clusterBad[size_t(i)] = 1;
-          return;
-        }
-        if (b.params.plasticity.enabled()) {
-          const auto tp = Clock::now();
-          const Mat3 R = fit.rotation.matrix();
-          const Mat3 stretch = R.transpose() * fit.linear;
-          if (updatePlasticDeformation(0.5 * (stretch + stretch.transpose()), h,
-                                       b.params.plasticity, s.plastic[c])) {
-            s.shape[c] = deriveClusterShape(m.clusterRest[c], s.plastic[c], quadratic);
-            fit = fitCluster(sum, ref, m.clusterRest[c], s.shape[c], s.plastic[c], fit.rotation);
-          }
-          plasticSeconds[size_t(i)] = secondsSince(tp);
-        }
-        s.rotation[c] = fit.rotation;
-        s.ref[c] = fit.centre.cast<float>();
-        s.goal[c] = goalTransform(fit, sum, m.clusterRest[c], s.shape[c], s.plastic[c], b.params);
-        packGoalRows(s.goal[c], s.goalRows[c]);
-        if (!s.goal[c].L.allFinite() || !s.goal[c].Q.allFinite() || !s.goal[c].t.allFinite())
-          clusterBad[size_t(i)] = 1;
+        clusterBad[size_t(i)] =
+            updateCluster(gc.slot, size_t(gc.cluster), gc.firstTask, &plasticSeconds[size_t(i)]);
       });
+  // Batches of small clusters (rigid and linear bodies without plastic flow): eight clusters per
+  // kernel call; a lane the kernel cannot certify goes through updateCluster.
+  const std::vector<GlobalBatch>& batches = layout.batches;
+  for (int o : order) {
+    BodyState& s = slots[size_t(o)].state;
+    const BodyModel& m = *slots[size_t(o)].model;
+    if (!s.batchShapeStale || !usesBatches(m, slots[size_t(o)].params)) continue;
+    for (size_t k = 0; k < m.batches.size(); ++k)
+      for (int l = 0; l < kBatchLanes; ++l) {
+        const size_t c = size_t(m.batches[k].cluster[l]);
+        setBatchShapeLane(s.batchShape[k], l, s.plastic[c], s.shape[c], m.clusterRest[c].centre);
+      }
+    s.batchShapeStale = false;
+  }
+  batchBad.assign(batches.size(), 0);
+  // Static split: a thread handles the same batches every sub-step, so the clusters' state and
+  // goals stay in its cache (with a dynamic split they moved between cores every sub-step, which
+  // cost more than the load balance gained).
+  parallelFor(static_cast<int>(batches.size()), 64, [&](int i) {
+    const GlobalBatch& gb = batches[size_t(i)];
+    BodySlot& b = slots[size_t(gb.slot)];
+    const BodyModel& m = *b.model;
+    BodyState& s = b.state;
+    const ClusterBatch& batch = m.batches[size_t(gb.batch)];
+    ClusterBatchLanes lanes;
+    for (int l = 0; l < kBatchLanes; ++l) {
+      const size_t c = size_t(batch.cluster[l]);
+      const Eigen::Quaterniond& q = s.rotation[c];
+      for (int a = 0; a < 3; ++a) lanes.ref[a][l] = s.ref[c][a];
+      lanes.rotation[0][l] = float(q.w());
+      lanes.rotation[1][l] = float(q.x());
+      lanes.rotation[2][l] = float(q.y());
+      lanes.rotation[3][l] = float(q.z());
+    }
+    const float* x[3] = {s.x.col(0).data(), s.x.col(1).data(), s.x.col(2).data()};
+    const ClusterBatchGoals goals =
+        matchClusterBatch(batch, s.batchShape[size_t(gb.batch)], x, b.params, lanes);
+    for (int l = 0; l < batch.count; ++l) {
+      const size_t c = size_t(batch.cluster[l]);
+      if (goals.nonFinite >> l & 1u) {
+        batchBad[size_t(i)] = 1;
+      } else if (goals.fallback >> l & 1u) {
+        double unusedPlasticTime = 0;  // batched bodies have no plastic flow
+        if (updateCluster(gb.slot, c, gb.firstTask + m.taskStart[c], &unusedPlasticTime))
+          batchBad[size_t(i)] = 1;
+      } else {
+        // goalQuad stays zero (set when the body entered the batches).
+        Eigen::Matrix<float, 12, 1>& rows = s.goalRows[c];
+        for (int a = 0; a < 3; ++a) {
+          for (int j = 0; j < 3; ++j) rows[4 * a + j] = goals.L[3 * a + j][l];
+          rows[4 * a + 3] = goals.t[a][l];
+          s.ref[c][a] = lanes.ref[a][l];
+        }
+        s.rotation[c] = Eigen::Quaterniond(lanes.rotation[0][l], lanes.rotation[1][l],
+                                           lanes.rotation[2][l], lanes.rotation[3][l]);
+      }
+    }
+  });
+  for (size_t i = 0; i < batches.size(); ++i)
+    if (batchBad[i]) badBodies[size_t(batches[i].slot)] = 1;
+  // The plastic path may have changed Sᵖ of clusters that a later switch puts into batches.
+  for (int o : order)
+    if (slots[size_t(o)].params.plasticity.enabled()) slots[size_t(o)].state.batchShapeStale = true;
   double plasticTotal = 0;
   for (size_t i = 0; i < clusters.size(); ++i) {
     plasticTotal += plasticSeconds[i];
@@ -579,14 +686,14 @@ bool integrateBlock(const BodyModel& m, BodyState& s, const BodyParams& params, 
   };
   if (m.wholeBodyCluster) {
     auto kernel = quadratic ? integrateQuadraticRange : integrateLinearRange;
-    return kernel(px, py, pz, vx, vy, vz, rx, ry, rz, begin, end, s.goal[0], hf, pull, gvx, gvy,
+    return kernel(px, py, pz, vx, vy, vz, rx, ry, rz, begin, end, goalOf(s, 0), hf, pull, gvx, gvy,
                   gvz) != 0;
   }
   const int* start = m.particleStart.data();
   const int* clusterOf = m.particleClusters.data();
   const float* invCount = m.invCount.data();
-  const GoalTransform* goals = s.goal.data();
   const Eigen::Matrix<float, 12, 1>* rows = s.goalRows.data();
+  const Eigen::Matrix<float, 3, 6>* quads = s.goalQuad.data();
   if (!quadratic) {
     return run([=](int i, float* g) {
       // Average the goal transforms of the particle's clusters, then evaluate once.
@@ -600,18 +707,21 @@ bool integrateBlock(const BodyModel& m, BodyState& s, const BodyParams& params, 
   }
   return run([=](int i, float* g) {
     // Average the goal transforms of the particle's clusters, then evaluate once.
-    Eigen::Matrix3f L = Eigen::Matrix3f::Zero();
+    Eigen::Matrix<float, 12, 1> sum = Eigen::Matrix<float, 12, 1>::Zero();
     Eigen::Matrix<float, 3, 6> Q = Eigen::Matrix<float, 3, 6>::Zero();
-    Eigen::Vector3f t = Eigen::Vector3f::Zero();
     for (int k = start[i]; k < start[i + 1]; ++k) {
-      const GoalTransform& T = goals[clusterOf[k]];
-      L += T.L;
-      t += T.t;
-      if (quadratic) Q += T.Q;
+      sum += rows[clusterOf[k]];
+      Q += quads[clusterOf[k]];
+    }
+    Eigen::Matrix3f L;
+    Eigen::Vector3f t;
+    for (int a = 0; a < 3; ++a) {
+      for (int j = 0; j < 3; ++j) L(a, j) = sum[4 * a + j];
+      t[a] = sum[4 * a + 3];
     }
     const Eigen::Vector3f r(rx[i], ry[i], rz[i]);
     Eigen::Vector3f goal = L * r + t;
-    if (quadratic) goal += Q * monomials<float>(r);
+    goal += Q * monomials<float>(r);
     goal *= invCount[i];
     g[0] = goal.x();
     g[1] = goal.y();
@@ -624,13 +734,14 @@ bool integrateBlock(const BodyModel& m, BodyState& s, const BodyParams& params, 
 void World::Data::integrate(double h, std::vector<char>& badBodies) {
   const std::vector<ParticleBlock>& blocks = layout.blocks;
   blockBad.assign(blocks.size(), 0);
-  parallelFor(static_cast<int>(blocks.size()), layout.particles >= kMinParallelWork ? 2 : INT32_MAX,
-              [&](int i) {
-                const ParticleBlock& blk = blocks[size_t(i)];
-                BodySlot& b = slots[size_t(blk.slot)];
-                blockBad[size_t(i)] = integrateBlock(*b.model, b.state, b.params, settings.gravity,
-                                                     h, blk.begin, blk.end);
-              });
+  const long long work = layout.particles + layout.members;
+  parallelFor(
+      static_cast<int>(blocks.size()), work >= kMinParallelIntegration ? 2 : INT32_MAX, [&](int i) {
+        const ParticleBlock& blk = blocks[size_t(i)];
+        BodySlot& b = slots[size_t(blk.slot)];
+        blockBad[size_t(i)] =
+            integrateBlock(*b.model, b.state, b.params, settings.gravity, h, blk.begin, blk.end);
+      });
   for (size_t i = 0; i < blocks.size(); ++i)
     if (blockBad[i]) badBodies[size_t(blocks[i].slot)] = 1;
   // Pinned particles stay where they started.
@@ -901,15 +1012,27 @@ void World::Data::rebuildLayout() {
     const BodyModel& m = *slots[size_t(s)].model;
     const int base = static_cast<int>(layout.tasks.size());
     for (int t = 0; t < static_cast<int>(m.tasks.size()); ++t) layout.tasks.push_back({s, t});
+    std::vector<char> inBatch(size_t(m.clusterCount()), 0);
+    if (usesBatches(m, slots[size_t(s)].params)) {
+      // The batched kernel writes only [L | t]; rigid and linear goals have no quadratic part.
+      for (auto& Q : slots[size_t(s)].state.goalQuad) Q.setZero();
+      for (int k = 0; k < static_cast<int>(m.batches.size()); ++k) {
+        layout.batches.push_back({s, k, base});
+        for (int l = 0; l < m.batches[size_t(k)].count; ++l)
+          inBatch[size_t(m.batches[size_t(k)].cluster[l])] = 1;
+      }
+    }
     for (int c = 0; c < m.clusterCount(); ++c) {
-      layout.clusters.push_back({s, c, base + m.taskStart[size_t(c)]});
+      if (!inBatch[size_t(c)]) layout.clusters.push_back({s, c, base + m.taskStart[size_t(c)]});
       if (m.taskStart[size_t(c) + 1] - m.taskStart[size_t(c)] > 1)
         for (int t = m.taskStart[size_t(c)]; t < m.taskStart[size_t(c) + 1]; ++t)
           layout.splitTasks.push_back(base + t);
     }
     const int n = m.particleCount();
-    for (int b = 0; b < n; b += kParticlesPerBlock)
-      layout.blocks.push_back({s, b, std::min(n, b + kParticlesPerBlock)});
+    // Clustered bodies in smaller blocks: a particle there costs a sum over its clusters, and
+    // blocks that follow the clusters' split over threads read goals their own thread wrote.
+    const int block = m.wholeBodyCluster ? kParticlesPerBlock : kClusteredParticlesPerBlock;
+    for (int b = 0; b < n; b += block) layout.blocks.push_back({s, b, std::min(n, b + block)});
     layout.members += static_cast<long long>(m.members.size());
     layout.particles += n;
   }
@@ -1124,6 +1247,7 @@ const BodyParams& World::params(BodyHandle h) const {
 void World::setParams(BodyHandle h, const BodyParams& p) {
   BodySlot& s = d_->slot(h);
   validateParams(p);
+  if (usesBatches(*s.model, p) != usesBatches(*s.model, s.params)) d_->layoutDirty = true;
   s.params = p;
 }
 
@@ -1217,7 +1341,7 @@ Eigen::MatrixX3d World::goals(BodyHandle h) const {
     Vec3 g = Vec3::Zero();
     const Vec3 r = m.rest.row(i).transpose().cast<double>();
     for (int k = m.particleStart[size_t(i)]; k < m.particleStart[size_t(i) + 1]; ++k) {
-      const GoalTransform& T = b.state.goal[size_t(m.particleClusters[size_t(k)])];
+      const GoalTransform T = goalOf(b.state, size_t(m.particleClusters[size_t(k)]));
       g += T.L.cast<double>() * r + T.Q.cast<double>() * monomials<double>(r) + T.t.cast<double>();
     }
     out.row(i) = (g * double(m.invCount[i])).transpose();
