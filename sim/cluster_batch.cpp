@@ -93,6 +93,21 @@ struct M3 {
   return R;
 }
 
+// For symmetric H = [[h00 h01 h02] [h01 h11 h12] [h02 h12 h22]]: (*x, *y, *z) = adj(H)·b, which is
+// det(H)·H⁻¹b, and *definite = the pivots of H's LDLᵀ all exceed `margin` (tested as
+// h00 > margin, m₂ > margin·h00, det > margin·m₂, with m₂ = h00·h11 − h01²).
+[[gnu::always_inline]] inline void solveAdjugate(F8 h00, F8 h11, F8 h22, F8 h01, F8 h02, F8 h12,
+                                                 const F8 (&b)[3], F8 margin, F8* x, F8* y, F8* z,
+                                                 I8* definite) {
+  const F8 c00 = h11 * h22 - h12 * h12, c01 = h02 * h12 - h01 * h22, c02 = h01 * h12 - h02 * h11;
+  const F8 c11 = h00 * h22 - h02 * h02, c12 = h01 * h02 - h00 * h12, c22 = h00 * h11 - h01 * h01;
+  const F8 det = h00 * c00 + h01 * c01 + h02 * c02;
+  *definite = (h00 > margin) & (c22 > margin * h00) & (det > margin * c22);
+  *x = c00 * b[0] + c01 * b[1] + c02 * b[2];
+  *y = c01 * b[0] + c11 * b[1] + c12 * b[2];
+  *z = c02 * b[0] + c12 * b[1] + c22 * b[2];
+}
+
 // Cube root for d in [0.512, 1.953] (the range volume restoration clamps to): Newton from the
 // tangent at 1; three steps reach float precision there.
 [[gnu::always_inline]] inline F8 cbrtNearOne(F8 d) {
@@ -232,6 +247,13 @@ matchClusterBatch(const ClusterBatch& batch, const ClusterBatchShape& shape,
   for (int e = 0; e < 9; ++e) An.m[e] = Apq.m[e] * invScale;
   F8 qw = load(lanes.rotation[0]), qx = load(lanes.rotation[1]), qy = load(lanes.rotation[2]),
      qz = load(lanes.rotation[3]);
+  {  // exactly unit, as the steps below keep it
+    const F8 inv = one / sqrt8(qw * qw + qx * qx + qy * qy + qz * qz);
+    qw *= inv;
+    qx *= inv;
+    qy *= inv;
+    qz *= inv;
+  }
   I8 active = usable, converged = {};
   for (int it = 0; it < kMaxRotationSteps; ++it) {
     bool any = false;
@@ -247,17 +269,13 @@ matchClusterBatch(const ClusterBatch& batch, const ClusterBatchShape& shape,
     const F8 h00 = B(1, 1) + B(2, 2), h11 = B(0, 0) + B(2, 2), h22 = B(0, 0) + B(1, 1);
     const F8 h01 = -half * (B(0, 1) + B(1, 0)), h02 = -half * (B(0, 2) + B(2, 0)),
              h12 = -half * (B(1, 2) + B(2, 1));
-    // H·d = τ by LDLᵀ; a pivot at or below the margin: not the basin of the maximum.
+    // Newton's axis H⁻¹τ, up to its length (normalised below): the adjugate times τ, whose
+    // entries are independent of each other (no division chain). H is positive definite beyond
+    // the margin when its LDLᵀ pivots h00, m₂/h00 and det/m₂ are (m₂ the leading 2×2 minor).
     const F8 margin = splat(kDefiniteMargin);
-    const F8 d0 = h00;
-    const F8 l10 = h01 / d0, l20 = h02 / d0;
-    const F8 d1 = h11 - l10 * h01;
-    const F8 l21 = (h12 - l20 * h01) / d1;
-    const F8 d2 = h22 - l20 * h02 - l21 * l21 * d1;
-    const I8 definite = (d0 > margin) & (d1 > margin) & (d2 > margin);
-    const F8 y1 = tau[1] - l10 * tau[0], y2 = tau[2] - l20 * tau[0] - l21 * y1;
-    const F8 n2 = y2 / d2, n1 = y1 / d1 - l21 * n2, n0 = tau[0] / d0 - l10 * n1 - l20 * n2;
-    F8 u0 = n0, u1 = n1, u2 = n2;
+    F8 u0, u1, u2;
+    I8 definite;
+    solveAdjugate(h00, h11, h22, h01, h02, h12, tau, margin, &u0, &u1, &u2, &definite);
     // Lanes off the maximum's basin need more work; most sub-steps have none, and skipping the
     // work then changes no lane's result.
     const bool anySaddle = bits(active & ~definite) != 0;
@@ -270,19 +288,23 @@ matchClusterBatch(const ClusterBatch& batch, const ClusterBatchShape& shape,
       gersh = select(h11 - a01 - a12 < gersh, h11 - a01 - a12, gersh);
       gersh = select(h22 - a02 - a12 < gersh, h22 - a02 - a12, gersh);
       const F8 mu = select(gersh < splat(0.1f), splat(0.1f) - gersh, zero);
-      const F8 e0 = h00 + mu, e1 = h11 + mu, e2 = h22 + mu;
-      const F8 k10 = h01 / e0, k20 = h02 / e0;
-      const F8 f1 = e1 - k10 * h01;
-      const F8 k21 = (h12 - k20 * h01) / f1;
-      const F8 f2 = e2 - k20 * h02 - k21 * k21 * f1;
-      const F8 z1 = tau[1] - k10 * tau[0], z2 = tau[2] - k20 * tau[0] - k21 * z1;
-      const F8 m2 = z2 / f2, m1 = z1 / f1 - k21 * m2, m0 = tau[0] / e0 - k10 * m1 - k20 * m2;
-      u0 = select(definite, n0, m0);
-      u1 = select(definite, n1, m1);
-      u2 = select(definite, n2, m2);
+      F8 m0, m1, m2;
+      I8 shiftedDefinite;  // always, by diagonal dominance
+      solveAdjugate(h00 + mu, h11 + mu, h22 + mu, h01, h02, h12, tau, zero, &m0, &m1, &m2,
+                    &shiftedDefinite);
+      u0 = select(definite, u0, m0);
+      u1 = select(definite, u1, m1);
+      u2 = select(definite, u2, m2);
     }
-    const F8 len2 = u0 * u0 + u1 * u1 + u2 * u2;
-    I8 still = len2 < splat(1e-30f);  // τ = 0: a maximum if definite, else a saddle
+    // τ = 0: a maximum if definite, else a saddle. An axis too short to normalise (τ nearly
+    // along a direction where H is almost singular) is replaced by the gradient, still uphill.
+    I8 still = tau[0] * tau[0] + tau[1] * tau[1] + tau[2] * tau[2] < splat(1e-30f);
+    F8 len2 = u0 * u0 + u1 * u1 + u2 * u2;
+    const I8 tiny = len2 < splat(1e-30f);
+    u0 = select(tiny, tau[0], u0);
+    u1 = select(tiny, tau[1], u1);
+    u2 = select(tiny, tau[2], u2);
+    len2 = select(tiny, u0 * u0 + u1 * u1 + u2 * u2, len2);
     const F8 invLen = one / sqrt8(select(still, one, len2));
     u0 *= invLen;
     u1 *= invLen;
@@ -314,15 +336,20 @@ matchClusterBatch(const ClusterBatch& batch, const ClusterBatchShape& shape,
     const F8 invR = one / sqrt8(select(still, one, g1 * g1 + g2 * g2));
     const F8 c = g2 * invR, s = g1 * invR;
     const F8 ch = sqrt8(nonNegative(half * (one + c)));  // |c| may exceed 1 by round-off
-    const F8 shWide = sqrt8(nonNegative(half * (one - c)));
-    const F8 sh = select(c > zero, s / (ch + ch), select(s < zero, -shWide, shWide));
+    F8 sh = s / (ch + ch);
+    if (bits(active & ~(c > zero)) != 0) {  // a turn beyond π/2 somewhere
+      const F8 shWide = sqrt8(nonNegative(half * (one - c)));
+      sh = select(c > zero, sh, select(s < zero, -shWide, shWide));
+    }
     const F8 hx = sh * u0, hy = sh * u1, hz = sh * u2;
-    // (ch, sh·u) ⊗ q, normalised against round-off.
+    // (ch, sh·u) ⊗ q. Both factors are unit quaternions up to round-off, so the product's norm
+    // is 1 within a few ulp and one Newton step of 1/√n (n ≈ 1) renormalises it to float
+    // precision without a square root.
     F8 nw = ch * qw - (hx * qx + hy * qy + hz * qz);
     F8 nx = ch * qx + hx * qw + (hy * qz - hz * qy);
     F8 ny = ch * qy + hy * qw + (hz * qx - hx * qz);
     F8 nz = ch * qz + hz * qw + (hx * qy - hy * qx);
-    const F8 invNorm = one / sqrt8(nw * nw + nx * nx + ny * ny + nz * nz);
+    const F8 invNorm = half * (splat(3.0f) - (nw * nw + nx * nx + ny * ny + nz * nz));
     const I8 step = active & ~still;
     qw = select(step, nw * invNorm, qw);
     qx = select(step, nx * invNorm, qx);
