@@ -406,16 +406,17 @@ matchClusterBatch(const ClusterBatch& batch, const ClusterBatchShape& shape,
                               T(a, 2) * load(shape.s0[2]));
     finite &= isFinite(t);
     store(out.t[a], t);
-    store(lanes.ref[a], centre[a]);
   }
   for (int e = 0; e < 9; ++e) {
     finite &= isFinite(L.m[e]);
     store(out.L[e], L.m[e]);
   }
-  store(lanes.rotation[0], qw);
-  store(lanes.rotation[1], qx);
-  store(lanes.rotation[2], qy);
-  store(lanes.rotation[3], qz);
+  // The lanes' state advances where the result stands (padding lanes included, so they stay
+  // warm); elsewhere it keeps the input, the general path's warm start.
+  const I8 keep = converged & finite;
+  for (int a = 0; a < 3; ++a) store(lanes.ref[a], select(keep, centre[a], load(lanes.ref[a])));
+  const F8 q[4] = {qw, qx, qy, qz};
+  for (int k = 0; k < 4; ++k) store(lanes.rotation[k], select(keep, q[k], load(lanes.rotation[k])));
   const std::uint32_t used = (1u << batch.count) - 1u;
   out.nonFinite = bits(~finite) & used;
   out.fallback &= used & ~out.nonFinite;

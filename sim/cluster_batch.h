@@ -77,8 +77,8 @@ void setBatchShapeLane(ClusterBatchShape& shape, int lane, const Mat3& plastic,
                        const ClusterShape& derived, const Eigen::Vector3f& restCentre);
 
 // Goals of one batch for a body in `params.mode` (Rigid or Linear; Quadratic is not batched).
-// x: particle position columns (m). `lanes` is updated for every lane that is neither in
-// `fallback` nor in `nonFinite`.
+// x: particle position columns (m). `lanes` advances for every lane with a result; lanes in
+// `fallback` or `nonFinite` keep their input. Goals are valid for lanes in neither.
 ClusterBatchGoals matchClusterBatch(const ClusterBatch& batch, const ClusterBatchShape& shape,
                                     const float* const x[3], const BodyParams& params,
                                     ClusterBatchLanes& lanes);

@@ -128,7 +128,42 @@ struct BodyState {
   // Per batch of the model: Sᵖ-dependent data in lanes, and whether it lags behind Sᵖ.
   std::vector<ClusterBatchShape> batchShape;
   bool batchShapeStale = true;
+  // Per batch: the clusters' reference points and rotations in lanes. While the body runs in
+  // batches (lanesHoldState) these are the current values and `ref`/`rotation` of its batched
+  // clusters lag behind; rebuildLayout hands the state over when that changes.
+  std::vector<ClusterBatchLanes> batchLanes;
+  bool lanesHoldState = false;
 };
+
+// Copies the batched clusters' reference points and rotations from `ref`/`rotation` into the
+// batch lanes (every lane, padding included), or back (lanes in use only).
+void lanesFromClusters(const BodyModel& m, BodyState& s) {
+  s.batchLanes.resize(m.batches.size());
+  for (size_t k = 0; k < m.batches.size(); ++k)
+    for (int l = 0; l < kBatchLanes; ++l) {
+      const size_t c = size_t(m.batches[k].cluster[l]);
+      ClusterBatchLanes& lanes = s.batchLanes[k];
+      for (int a = 0; a < 3; ++a) lanes.ref[a][l] = s.ref[c][a];
+      const Eigen::Quaterniond& q = s.rotation[c];
+      lanes.rotation[0][l] = float(q.w());
+      lanes.rotation[1][l] = float(q.x());
+      lanes.rotation[2][l] = float(q.y());
+      lanes.rotation[3][l] = float(q.z());
+    }
+}
+
+void laneToCluster(const ClusterBatchLanes& lanes, int l, BodyState& s, size_t c) {
+  for (int a = 0; a < 3; ++a) s.ref[c][a] = lanes.ref[a][l];
+  s.rotation[c] = Eigen::Quaterniond(lanes.rotation[0][l], lanes.rotation[1][l],
+                                     lanes.rotation[2][l], lanes.rotation[3][l])
+                      .normalized();
+}
+
+void clustersFromLanes(const BodyModel& m, BodyState& s) {
+  for (size_t k = 0; k < m.batches.size(); ++k)
+    for (int l = 0; l < m.batches[k].count; ++l)
+      laneToCluster(s.batchLanes[k], l, s, size_t(m.batches[k].cluster[l]));
+}
 
 // Whether a body's small clusters go through the batched kernel: rigid and linear bodies
 // without plastic flow (a plastic update is a per-cluster decision with its own re-fit).
@@ -282,6 +317,7 @@ void resetClusterState(const BodyModel& m, BodyState& s) {
   }
   s.batchShape.resize(m.batches.size());
   s.batchShapeStale = true;
+  lanesFromClusters(m, s);  // both copies current
 }
 
 void resetBodyState(const BodyModel& m, BodyState& s) {
@@ -529,16 +565,7 @@ void World::Data::computeGoals(double h, std::vector<char>& badBodies, StepProfi
     const BodyModel& m = *b.model;
     BodyState& s = b.state;
     const ClusterBatch& batch = m.batches[size_t(gb.batch)];
-    ClusterBatchLanes lanes;
-    for (int l = 0; l < kBatchLanes; ++l) {
-      const size_t c = size_t(batch.cluster[l]);
-      const Eigen::Quaterniond& q = s.rotation[c];
-      for (int a = 0; a < 3; ++a) lanes.ref[a][l] = s.ref[c][a];
-      lanes.rotation[0][l] = float(q.w());
-      lanes.rotation[1][l] = float(q.x());
-      lanes.rotation[2][l] = float(q.y());
-      lanes.rotation[3][l] = float(q.z());
-    }
+    ClusterBatchLanes& lanes = s.batchLanes[size_t(gb.batch)];
     const float* x[3] = {s.x.col(0).data(), s.x.col(1).data(), s.x.col(2).data()};
     const ClusterBatchGoals goals =
         matchClusterBatch(batch, s.batchShape[size_t(gb.batch)], x, b.params, lanes);
@@ -547,19 +574,23 @@ void World::Data::computeGoals(double h, std::vector<char>& badBodies, StepProfi
       if (goals.nonFinite >> l & 1u) {
         batchBad[size_t(i)] = 1;
       } else if (goals.fallback >> l & 1u) {
+        // The general path, from and back to the lane's state.
+        laneToCluster(lanes, l, s, c);
         double unusedPlasticTime = 0;  // batched bodies have no plastic flow
         if (updateCluster(gb.slot, c, gb.firstTask + m.taskStart[c], &unusedPlasticTime))
           batchBad[size_t(i)] = 1;
+        for (int a = 0; a < 3; ++a) lanes.ref[a][l] = s.ref[c][a];
+        lanes.rotation[0][l] = float(s.rotation[c].w());
+        lanes.rotation[1][l] = float(s.rotation[c].x());
+        lanes.rotation[2][l] = float(s.rotation[c].y());
+        lanes.rotation[3][l] = float(s.rotation[c].z());
       } else {
         // goalQuad stays zero (set when the body entered the batches).
         Eigen::Matrix<float, 12, 1>& rows = s.goalRows[c];
         for (int a = 0; a < 3; ++a) {
           for (int j = 0; j < 3; ++j) rows[4 * a + j] = goals.L[3 * a + j][l];
           rows[4 * a + 3] = goals.t[a][l];
-          s.ref[c][a] = lanes.ref[a][l];
         }
-        s.rotation[c] = Eigen::Quaterniond(lanes.rotation[0][l], lanes.rotation[1][l],
-                                           lanes.rotation[2][l], lanes.rotation[3][l]);
       }
     }
   });
@@ -1013,9 +1044,14 @@ void World::Data::rebuildLayout() {
     const int base = static_cast<int>(layout.tasks.size());
     for (int t = 0; t < static_cast<int>(m.tasks.size()); ++t) layout.tasks.push_back({s, t});
     std::vector<char> inBatch(size_t(m.clusterCount()), 0);
-    if (usesBatches(m, slots[size_t(s)].params)) {
+    BodyState& state = slots[size_t(s)].state;
+    const bool batched = usesBatches(m, slots[size_t(s)].params);
+    if (batched && !state.lanesHoldState) lanesFromClusters(m, state);
+    if (!batched && state.lanesHoldState) clustersFromLanes(m, state);
+    state.lanesHoldState = batched;
+    if (batched) {
       // The batched kernel writes only [L | t]; rigid and linear goals have no quadratic part.
-      for (auto& Q : slots[size_t(s)].state.goalQuad) Q.setZero();
+      for (auto& Q : state.goalQuad) Q.setZero();
       for (int k = 0; k < static_cast<int>(m.batches.size()); ++k) {
         layout.batches.push_back({s, k, base});
         for (int l = 0; l < m.batches[size_t(k)].count; ++l)
