@@ -16,9 +16,12 @@ constexpr double kMinVolumeScale = 0.8;
 // ‖A − R‖_F of a linear fit is capped here: stretches up to about ×3 along an axis.
 constexpr double kMaxFitDeparture = 2.0;
 
+// Inlined into each target variant of accumulateMoments (below).
 template <bool kGather, bool kQuadratic>
-ClusterMoments accumulate(const ParticleColumns& p, const int* members, int begin, int end,
-                          const Eigen::Vector3f& ref, const Eigen::Vector3f& rc) {
+[[gnu::always_inline]] inline ClusterMoments accumulate(const ParticleColumns& p,
+                                                        const int* members, int begin, int end,
+                                                        const Eigen::Vector3f& ref,
+                                                        const Eigen::Vector3f& rc) {
   constexpr int kCount = kQuadratic ? 30 : 12;
   double total[kCount] = {};
   const float refx = ref.x(), refy = ref.y(), refz = ref.z();
@@ -79,9 +82,7 @@ ClusterMoments accumulate(const ParticleColumns& p, const int* members, int begi
   return out;
 }
 
-}  // namespace
-
-// Small clusters (a tetrahedron, a handful of particles): straight double sums, no lane
+// Small clusters (a tetrahedron, a handful of particles): straight float sums, no lane
 // bookkeeping, which for a few members costs more than the sums themselves.
 ClusterMoments accumulateSmall(const ParticleColumns& p, const int* members, int begin, int end,
                                const Eigen::Vector3f& ref, const Eigen::Vector3f& rc,
@@ -106,9 +107,18 @@ ClusterMoments accumulateSmall(const ParticleColumns& p, const int* members, int
   return out;
 }
 
-ClusterMoments accumulateMoments(const ParticleColumns& p, const int* members, int begin, int end,
-                                 const Eigen::Vector3f& ref, const Eigen::Vector3f& restCentre,
-                                 bool quadratic) {
+}  // namespace
+
+// Compiled for x86-64-v3 (AVX2: eight lanes per register and sixteen registers, so the twelve
+// linear accumulators stay in registers instead of spilling) and the baseline; the loader picks
+// by CPU. Same bits either way: lane-wise IEEE operations, fixed summation order, no FMA.
+// (A test defines SB_SHAPE_MATCHING_BASELINE to build the baseline alone and compare the bits.)
+#ifndef SB_SHAPE_MATCHING_BASELINE
+__attribute__((target_clones("arch=x86-64-v3", "default")))
+#endif
+ClusterMoments
+accumulateMoments(const ParticleColumns& p, const int* members, int begin, int end,
+                  const Eigen::Vector3f& ref, const Eigen::Vector3f& restCentre, bool quadratic) {
   if (end - begin < 2 * kLanes)
     return accumulateSmall(p, members, begin, end, ref, restCentre, quadratic);
   if (members) {
