@@ -90,6 +90,11 @@ struct BodyModel {
   // particleClusters[particleStart[i] .. particleStart[i+1]), ascending.
   std::vector<int> memberStart, members;
   std::vector<int> particleStart, particleClusters;
+  // Particles with the same list of clusters form a group (with grid clusters: every particle
+  // of a cell); the integration of a clustered body sums its goals once per group. groupOf[i]
+  // (#P); group g's clusters are groupClusters[groupStart[g] .. groupStart[g+1]), ascending.
+  // Empty when groups would hold fewer than two particles on average.
+  std::vector<int> groupOf, groupStart, groupClusters;
   Eigen::VectorXf matchWeight;  // wᵢ = mᵢ / (number of clusters of i): conserves momentum
   Eigen::VectorXf invCount;     // 1 / (number of clusters of i)
   std::vector<ClusterRestModel> clusterRest;
@@ -125,6 +130,11 @@ struct BodyState {
   std::vector<Eigen::Matrix<float, 12, 1>, Eigen::aligned_allocator<Eigen::Matrix<float, 12, 1>>>
       goalRows;
   std::vector<Eigen::Matrix<float, 3, 6>> goalQuad;
+  // Per particle group (BodyModel::groupOf): the sums of its clusters' goalRows and goalQuad,
+  // formed by the integration before it visits the particles.
+  std::vector<Eigen::Matrix<float, 12, 1>, Eigen::aligned_allocator<Eigen::Matrix<float, 12, 1>>>
+      groupRows;
+  std::vector<Eigen::Matrix<float, 3, 6>> groupQuad;
   // Per batch of the model: Sᵖ-dependent data in lanes, and whether it lags behind Sᵖ.
   std::vector<ClusterBatchShape> batchShape;
   bool batchShapeStale = true;
@@ -178,6 +188,32 @@ struct BodySlot {
   BodyParams params;
   BodyState state;
 };
+
+// Fills groupOf/groupStart/groupClusters from particleStart/particleClusters (see BodyModel).
+void buildGroups(BodyModel& m) {
+  m.groupOf.clear();
+  m.groupStart.assign(1, 0);
+  m.groupClusters.clear();
+  const int n = m.particleCount();
+  if (m.memberStart.size() <= 2) return;  // one cluster: nothing to share
+  std::map<std::vector<int>, int> ids;
+  m.groupOf.resize(size_t(n));
+  for (int i = 0; i < n; ++i) {
+    std::vector<int> list(m.particleClusters.begin() + m.particleStart[size_t(i)],
+                          m.particleClusters.begin() + m.particleStart[size_t(i) + 1]);
+    const auto [it, added] = ids.emplace(std::move(list), static_cast<int>(ids.size()));
+    if (added) {
+      m.groupClusters.insert(m.groupClusters.end(), it->first.begin(), it->first.end());
+      m.groupStart.push_back(static_cast<int>(m.groupClusters.size()));
+    }
+    m.groupOf[size_t(i)] = it->second;
+  }
+  if (2 * ids.size() > size_t(n)) {  // little to share: per-particle sums are cheaper
+    m.groupOf.clear();
+    m.groupStart.assign(1, 0);
+    m.groupClusters.clear();
+  }
+}
 
 std::shared_ptr<BodyModel> buildModel(const BodyDef& def, const ClusterDef& clusters,
                                       std::shared_ptr<const BodyModel> base) {
@@ -236,6 +272,7 @@ std::shared_ptr<BodyModel> buildModel(const BodyDef& def, const ClusterDef& clus
   for (int c = 0; c < nc; ++c)
     for (int k = m->memberStart[size_t(c)]; k < m->memberStart[size_t(c) + 1]; ++k)
       m->particleClusters[size_t(fill[size_t(m->members[size_t(k)])]++)] = c;
+  buildGroups(*m);
   m->matchWeight.resize(n);
   m->invCount.resize(n);
   for (int i = 0; i < n; ++i) {
@@ -365,6 +402,7 @@ struct WorkLayout {
   std::vector<GlobalCluster> clusters;  // clusters not in a batch
   std::vector<GlobalBatch> batches;
   std::vector<ParticleBlock> blocks;
+  std::vector<ParticleBlock> groupBlocks;  // the same over particle groups (begin, end: groups)
   long long members = 0, particles = 0;
 };
 
@@ -695,6 +733,41 @@ int integrateQuadraticRange(float* __restrict px, float* __restrict py, float* _
   return bad;
 }
 
+// g = (L·r + t + Q·mono(r))·invCount for summed goal rows [L | t] and quadratic parts Q.
+[[gnu::always_inline]] inline void evaluateQuadraticGoal(const Eigen::Matrix<float, 12, 1>& sum,
+                                                         const Eigen::Matrix<float, 3, 6>& Q,
+                                                         float rx, float ry, float rz,
+                                                         float invCount, float* g) {
+  Eigen::Matrix3f L;
+  Eigen::Vector3f t;
+  for (int a = 0; a < 3; ++a) {
+    for (int j = 0; j < 3; ++j) L(a, j) = sum[4 * a + j];
+    t[a] = sum[4 * a + 3];
+  }
+  const Eigen::Vector3f r(rx, ry, rz);
+  Eigen::Vector3f goal = L * r + t;
+  goal += Q * monomials<float>(r);
+  goal *= invCount;
+  g[0] = goal.x();
+  g[1] = goal.y();
+  g[2] = goal.z();
+}
+
+// groupRows/groupQuad of groups [begin, end) of a body (the quadratic parts only if `quadratic`).
+void sumGroupGoals(const BodyModel& m, BodyState& s, bool quadratic, int begin, int end) {
+  for (int g = begin; g < end; ++g) {
+    Eigen::Matrix<float, 12, 1> sum = Eigen::Matrix<float, 12, 1>::Zero();
+    Eigen::Matrix<float, 3, 6> Q = Eigen::Matrix<float, 3, 6>::Zero();
+    for (int k = m.groupStart[size_t(g)]; k < m.groupStart[size_t(g) + 1]; ++k) {
+      const size_t c = size_t(m.groupClusters[size_t(k)]);
+      sum += s.goalRows[c];
+      if (quadratic) Q += s.goalQuad[c];
+    }
+    s.groupRows[size_t(g)] = sum;
+    if (quadratic) s.groupQuad[size_t(g)] = Q;
+  }
+}
+
 // Integrates particles [begin, end) of one body; returns true if a non-finite value appeared.
 bool integrateBlock(const BodyModel& m, BodyState& s, const BodyParams& params, const Vec3& gravity,
                     double h, int begin, int end) {
@@ -725,6 +798,23 @@ bool integrateBlock(const BodyModel& m, BodyState& s, const BodyParams& params, 
   const float* invCount = m.invCount.data();
   const Eigen::Matrix<float, 12, 1>* rows = s.goalRows.data();
   const Eigen::Matrix<float, 3, 6>* quads = s.goalQuad.data();
+  if (!m.groupOf.empty()) {  // the sums are formed per group already
+    const int* groupOf = m.groupOf.data();
+    const Eigen::Matrix<float, 12, 1>* groupRows = s.groupRows.data();
+    const Eigen::Matrix<float, 3, 6>* groupQuad = s.groupQuad.data();
+    if (!quadratic)
+      return run([=](int i, float* g) {
+        const Eigen::Matrix<float, 12, 1>& sum = groupRows[groupOf[i]];
+        const float x = rx[i], y = ry[i], z = rz[i];
+        for (int a = 0; a < 3; ++a)
+          g[a] = (sum[4 * a] * x + sum[4 * a + 1] * y + sum[4 * a + 2] * z + sum[4 * a + 3]) *
+                 invCount[i];
+      });
+    return run([=](int i, float* g) {
+      evaluateQuadraticGoal(groupRows[groupOf[i]], groupQuad[groupOf[i]], rx[i], ry[i], rz[i],
+                            invCount[i], g);
+    });
+  }
   if (!quadratic) {
     return run([=](int i, float* g) {
       // Average the goal transforms of the particle's clusters, then evaluate once.
@@ -744,19 +834,7 @@ bool integrateBlock(const BodyModel& m, BodyState& s, const BodyParams& params, 
       sum += rows[clusterOf[k]];
       Q += quads[clusterOf[k]];
     }
-    Eigen::Matrix3f L;
-    Eigen::Vector3f t;
-    for (int a = 0; a < 3; ++a) {
-      for (int j = 0; j < 3; ++j) L(a, j) = sum[4 * a + j];
-      t[a] = sum[4 * a + 3];
-    }
-    const Eigen::Vector3f r(rx[i], ry[i], rz[i]);
-    Eigen::Vector3f goal = L * r + t;
-    goal += Q * monomials<float>(r);
-    goal *= invCount[i];
-    g[0] = goal.x();
-    g[1] = goal.y();
-    g[2] = goal.z();
+    evaluateQuadraticGoal(sum, Q, rx[i], ry[i], rz[i], invCount[i], g);
   });
 }
 
@@ -766,6 +844,15 @@ void World::Data::integrate(double h, std::vector<char>& badBodies) {
   const std::vector<ParticleBlock>& blocks = layout.blocks;
   blockBad.assign(blocks.size(), 0);
   const long long work = layout.particles + layout.members;
+  // Goal sums per particle group, in the order each particle would form them (same bits).
+  const std::vector<ParticleBlock>& groupBlocks = layout.groupBlocks;
+  parallelFor(static_cast<int>(groupBlocks.size()), work >= kMinParallelIntegration ? 2 : INT32_MAX,
+              [&](int i) {
+                const ParticleBlock& blk = groupBlocks[size_t(i)];
+                BodySlot& b = slots[size_t(blk.slot)];
+                sumGroupGoals(*b.model, b.state, b.params.mode == Mode::Quadratic, blk.begin,
+                              blk.end);
+              });
   parallelFor(
       static_cast<int>(blocks.size()), work >= kMinParallelIntegration ? 2 : INT32_MAX, [&](int i) {
         const ParticleBlock& blk = blocks[size_t(i)];
@@ -1069,6 +1156,11 @@ void World::Data::rebuildLayout() {
     // blocks that follow the clusters' split over threads read goals their own thread wrote.
     const int block = m.wholeBodyCluster ? kParticlesPerBlock : kClusteredParticlesPerBlock;
     for (int b = 0; b < n; b += block) layout.blocks.push_back({s, b, std::min(n, b + block)});
+    const int groups = static_cast<int>(m.groupStart.size()) - 1;
+    for (int g = 0; g < groups; g += kClusteredParticlesPerBlock)
+      layout.groupBlocks.push_back({s, g, std::min(groups, g + kClusteredParticlesPerBlock)});
+    state.groupRows.resize(size_t(groups));
+    state.groupQuad.resize(size_t(groups));
     layout.members += static_cast<long long>(m.members.size());
     layout.particles += n;
   }
