@@ -2,9 +2,12 @@
 //
 // One step (design.md §4) runs these phases in a fixed order, each timed into StepProfile:
 //   External    drag constraints and queued forces change velocities
-//   Goals       per cluster: centre of mass, A_pq, rotation, goal transform
+//   Goals       per cluster: centre of mass, A_pq, rotation, goal transform (clusters of at most
+//               8 particles of rigid/linear bodies without plastic flow: eight at a time in
+//               SIMD lanes, sim/cluster_batch.h)
 //   Plasticity  per cluster: creep of the rest shape (bodies with plasticity only)
-//   Integrate   per particle: blend the goals of its clusters, v += α(g − x)/h + h·gravity,
+//   Integrate   per particle: blend the goals of its clusters (summed once per group of
+//               particles with the same clusters), v += α(g − x)/h + h·gravity,
 //               x += h·v  (Müller et al. 2005: stable for every h when α ≤ 1)
 //   Damping     damp velocity relative to each body's rigid motion (bodies with damping only)
 //   Contacts    particles pushed out of other bodies' surfaces, friction (sim/body_contact.h)
