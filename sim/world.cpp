@@ -15,6 +15,7 @@
 #include "sim/cluster_rest.h"
 #include "sim/mass_properties.h"
 #include "sim/parallel_for.h"
+#include "sim/particle_groups.h"
 #include "sim/plasticity.h"
 #include "sim/shape_matching.h"
 
@@ -90,11 +91,9 @@ struct BodyModel {
   // particleClusters[particleStart[i] .. particleStart[i+1]), ascending.
   std::vector<int> memberStart, members;
   std::vector<int> particleStart, particleClusters;
-  // Particles with the same list of clusters form a group (with grid clusters: every particle
-  // of a cell); the integration of a clustered body sums its goals once per group. groupOf[i]
-  // (#P); group g's clusters are groupClusters[groupStart[g] .. groupStart[g+1]), ascending.
-  // Empty when groups would hold fewer than two particles on average.
-  std::vector<int> groupOf, groupStart, groupClusters;
+  // Particles with the same clusters (sim/particle_groups.h); empty when there is little to
+  // share. Goal sums are formed per group; so are the moments of non-quadratic bodies.
+  ParticleGroups groups;
   Eigen::VectorXf matchWeight;  // wᵢ = mᵢ / (number of clusters of i): conserves momentum
   Eigen::VectorXf invCount;     // 1 / (number of clusters of i)
   std::vector<ClusterRestModel> clusterRest;
@@ -135,6 +134,10 @@ struct BodyState {
   std::vector<Eigen::Matrix<float, 12, 1>, Eigen::aligned_allocator<Eigen::Matrix<float, 12, 1>>>
       groupRows;
   std::vector<Eigen::Matrix<float, 3, 6>> groupQuad;
+  // Per particle group, for bodies with grouped moments: each group's moments, summed about its
+  // reference point groupRef (its first particle's position this sub-step).
+  std::vector<ClusterMoments> groupMoments;
+  std::vector<Eigen::Vector3f> groupRef;
   // Per batch of the model: Sᵖ-dependent data in lanes, and whether it lags behind Sᵖ.
   std::vector<ClusterBatchShape> batchShape;
   bool batchShapeStale = true;
@@ -181,6 +184,12 @@ bool usesBatches(const BodyModel& m, const BodyParams& p) {
   return !m.batches.empty() && p.mode != Mode::Quadratic && !p.plasticity.enabled();
 }
 
+// Whether the moments of a body's (unbatched) clusters are added up from its particle groups'
+// moments (linear moments only: not in quadratic mode).
+bool usesGroupedMoments(const BodyModel& m, const BodyParams& p) {
+  return !m.groups.empty() && p.mode != Mode::Quadratic;
+}
+
 struct BodySlot {
   std::uint32_t generation = 0;
   bool alive = false;
@@ -188,32 +197,6 @@ struct BodySlot {
   BodyParams params;
   BodyState state;
 };
-
-// Fills groupOf/groupStart/groupClusters from particleStart/particleClusters (see BodyModel).
-void buildGroups(BodyModel& m) {
-  m.groupOf.clear();
-  m.groupStart.assign(1, 0);
-  m.groupClusters.clear();
-  const int n = m.particleCount();
-  if (m.memberStart.size() <= 2) return;  // one cluster: nothing to share
-  std::map<std::vector<int>, int> ids;
-  m.groupOf.resize(size_t(n));
-  for (int i = 0; i < n; ++i) {
-    std::vector<int> list(m.particleClusters.begin() + m.particleStart[size_t(i)],
-                          m.particleClusters.begin() + m.particleStart[size_t(i) + 1]);
-    const auto [it, added] = ids.emplace(std::move(list), static_cast<int>(ids.size()));
-    if (added) {
-      m.groupClusters.insert(m.groupClusters.end(), it->first.begin(), it->first.end());
-      m.groupStart.push_back(static_cast<int>(m.groupClusters.size()));
-    }
-    m.groupOf[size_t(i)] = it->second;
-  }
-  if (2 * ids.size() > size_t(n)) {  // little to share: per-particle sums are cheaper
-    m.groupOf.clear();
-    m.groupStart.assign(1, 0);
-    m.groupClusters.clear();
-  }
-}
 
 std::shared_ptr<BodyModel> buildModel(const BodyDef& def, const ClusterDef& clusters,
                                       std::shared_ptr<const BodyModel> base) {
@@ -272,13 +255,15 @@ std::shared_ptr<BodyModel> buildModel(const BodyDef& def, const ClusterDef& clus
   for (int c = 0; c < nc; ++c)
     for (int k = m->memberStart[size_t(c)]; k < m->memberStart[size_t(c) + 1]; ++k)
       m->particleClusters[size_t(fill[size_t(m->members[size_t(k)])]++)] = c;
-  buildGroups(*m);
   m->matchWeight.resize(n);
   m->invCount.resize(n);
   for (int i = 0; i < n; ++i) {
     m->invCount[i] = 1.0f / float(count[size_t(i)]);
     m->matchWeight[i] = m->mass[i] * m->invCount[i];
   }
+  const float* restCols[3] = {m->rest.col(0).data(), m->rest.col(1).data(), m->rest.col(2).data()};
+  m->groups = buildParticleGroups(n, m->particleStart, m->particleClusters, nc, restCols,
+                                  m->matchWeight.data());
   m->wholeBodyCluster = nc == 1 && int(m->members.size()) == n;
   m->clusterRest.resize(size_t(nc));
   m->tasks.clear();
@@ -386,6 +371,7 @@ struct GlobalCluster {
   int slot;
   int cluster;
   int firstTask;
+  bool grouped;  // moments from the body's particle groups (usesGroupedMoments)
 };
 
 // A batch of small clusters of some body; the body's tasks start at firstTask in the world's list.
@@ -403,6 +389,7 @@ struct WorkLayout {
   std::vector<GlobalBatch> batches;
   std::vector<ParticleBlock> blocks;
   std::vector<ParticleBlock> groupBlocks;  // the same over particle groups (begin, end: groups)
+  std::vector<ParticleBlock> momentGroupBlocks;  // group blocks of bodies with grouped moments
   long long members = 0, particles = 0;
 };
 
@@ -536,16 +523,44 @@ void World::Data::computeGoals(double h, std::vector<char>& badBodies, StepProfi
   const int minParallelTasks = layout.members >= kMinParallelWork ? 2 : INT32_MAX;
   parallelFor(static_cast<int>(split.size()), minParallelTasks,
               [&](int k) { partial[size_t(split[size_t(k)])] = taskMoments(split[size_t(k)]); });
-  // Per cluster: sum its tasks in order, fit, plastic flow, goal transform. Returns true when
-  // the cluster produced NaN/Inf; adds the time spent in plastic flow to *plasticTime.
-  auto updateCluster = [&](int slotIndex, size_t c, int firstTask, double* plasticTime) {
+  // Moments of particle groups (bodies with grouped moments), about each group's first particle.
+  const std::vector<ParticleBlock>& momentGroupBlocks = layout.momentGroupBlocks;
+  parallelFor(static_cast<int>(momentGroupBlocks.size()), minParallelTasks, [&](int i) {
+    const ParticleBlock& blk = momentGroupBlocks[size_t(i)];
+    BodySlot& b = slots[size_t(blk.slot)];
+    const BodyModel& m = *b.model;
+    BodyState& s = b.state;
+    const ParticleGroups& groups = m.groups;
+    ParticleColumns cols{{s.x.col(0).data(), s.x.col(1).data(), s.x.col(2).data()},
+                         {m.rest.col(0).data(), m.rest.col(1).data(), m.rest.col(2).data()},
+                         m.matchWeight.data()};
+    for (int a = 0; a < 3; ++a) cols.memberQ[a] = groups.memberRest.col(a).data();
+    cols.memberW = groups.memberWeight.data();
+    for (int g = blk.begin; g < blk.end; ++g) {
+      const int begin = groups.particleStart[size_t(g)], end = groups.particleStart[size_t(g) + 1];
+      s.groupRef[size_t(g)] = s.x.row(groups.particles[size_t(begin)]).transpose();
+      s.groupMoments[size_t(g)] =
+          accumulateMoments(cols, groups.particles.data(), begin, end, s.groupRef[size_t(g)],
+                            groups.restCentre[size_t(g)], false);
+    }
+  });
+  // Per cluster: sum its tasks in order (or its groups' moments), fit, plastic flow, goal
+  // transform. Returns true when the cluster produced NaN/Inf; adds the time spent in plastic
+  // flow to *plasticTime.
+  auto updateCluster = [&](int slotIndex, size_t c, int firstTask, bool grouped,
+                           double* plasticTime) {
     BodySlot& b = slots[size_t(slotIndex)];
     const BodyModel& m = *b.model;
     BodyState& s = b.state;
     const int taskCount = m.taskStart[c + 1] - m.taskStart[c];
-    ClusterMoments& sum = partial[size_t(firstTask)];  // tasks of a cluster summed in order
-    if (taskCount == 1) sum = taskMoments(firstTask);
-    for (int t = 1; t < taskCount; ++t) sum += partial[size_t(firstTask + t)];
+    ClusterMoments& sum = partial[size_t(firstTask)];  // scratch of this cluster
+    if (grouped) {
+      sum = clusterMomentsFromGroups(m.groups, int(c), s.groupMoments.data(), s.groupRef.data(),
+                                     s.ref[c], m.clusterRest[c].centre);
+    } else {
+      if (taskCount == 1) sum = taskMoments(firstTask);  // tasks of a cluster summed in order
+      for (int t = 1; t < taskCount; ++t) sum += partial[size_t(firstTask + t)];
+    }
     const Eigen::Vector3f ref = s.ref[c];
     const bool quadratic = b.params.mode == Mode::Quadratic;
     if (quadratic && !s.shape[c].hasQuadratic)  // switched to quadratic since the last derive
@@ -573,12 +588,12 @@ void World::Data::computeGoals(double h, std::vector<char>& badBodies, StepProfi
   };
   plasticSeconds.assign(clusters.size(), 0.0);
   clusterBad.assign(clusters.size(), 0);
-  parallelFor(
-      static_cast<int>(clusters.size()), clusters.size() >= 512 ? 2 : INT32_MAX, [&](int i) {
-        const GlobalCluster& gc = clusters[size_t(i)];
-        clusterBad[size_t(i)] =
-            updateCluster(gc.slot, size_t(gc.cluster), gc.firstTask, &plasticSeconds[size_t(i)]);
-      });
+  parallelFor(static_cast<int>(clusters.size()), clusters.size() >= 512 ? 2 : INT32_MAX,
+              [&](int i) {
+                const GlobalCluster& gc = clusters[size_t(i)];
+                clusterBad[size_t(i)] = updateCluster(gc.slot, size_t(gc.cluster), gc.firstTask,
+                                                      gc.grouped, &plasticSeconds[size_t(i)]);
+              });
   // Batches of small clusters (rigid and linear bodies without plastic flow): eight clusters per
   // kernel call; a lane the kernel cannot certify goes through updateCluster.
   const std::vector<GlobalBatch>& batches = layout.batches;
@@ -615,7 +630,7 @@ void World::Data::computeGoals(double h, std::vector<char>& badBodies, StepProfi
         // The general path, from and back to the lane's state.
         laneToCluster(lanes, l, s, c);
         double unusedPlasticTime = 0;  // batched bodies have no plastic flow
-        if (updateCluster(gb.slot, c, gb.firstTask + m.taskStart[c], &unusedPlasticTime))
+        if (updateCluster(gb.slot, c, gb.firstTask + m.taskStart[c], false, &unusedPlasticTime))
           batchBad[size_t(i)] = 1;
         for (int a = 0; a < 3; ++a) lanes.ref[a][l] = s.ref[c][a];
         lanes.rotation[0][l] = float(s.rotation[c].w());
@@ -758,8 +773,8 @@ void sumGroupGoals(const BodyModel& m, BodyState& s, bool quadratic, int begin, 
   for (int g = begin; g < end; ++g) {
     Eigen::Matrix<float, 12, 1> sum = Eigen::Matrix<float, 12, 1>::Zero();
     Eigen::Matrix<float, 3, 6> Q = Eigen::Matrix<float, 3, 6>::Zero();
-    for (int k = m.groupStart[size_t(g)]; k < m.groupStart[size_t(g) + 1]; ++k) {
-      const size_t c = size_t(m.groupClusters[size_t(k)]);
+    for (int k = m.groups.clusterStart[size_t(g)]; k < m.groups.clusterStart[size_t(g) + 1]; ++k) {
+      const size_t c = size_t(m.groups.clusters[size_t(k)]);
       sum += s.goalRows[c];
       if (quadratic) Q += s.goalQuad[c];
     }
@@ -798,8 +813,8 @@ bool integrateBlock(const BodyModel& m, BodyState& s, const BodyParams& params, 
   const float* invCount = m.invCount.data();
   const Eigen::Matrix<float, 12, 1>* rows = s.goalRows.data();
   const Eigen::Matrix<float, 3, 6>* quads = s.goalQuad.data();
-  if (!m.groupOf.empty()) {  // the sums are formed per group already
-    const int* groupOf = m.groupOf.data();
+  if (!m.groups.empty()) {  // the sums are formed per group already
+    const int* groupOf = m.groups.groupOf.data();
     const Eigen::Matrix<float, 12, 1>* groupRows = s.groupRows.data();
     const Eigen::Matrix<float, 3, 6>* groupQuad = s.groupQuad.data();
     if (!quadratic)
@@ -1145,9 +1160,11 @@ void World::Data::rebuildLayout() {
           inBatch[size_t(m.batches[size_t(k)].cluster[l])] = 1;
       }
     }
+    const bool grouped = usesGroupedMoments(m, slots[size_t(s)].params);
     for (int c = 0; c < m.clusterCount(); ++c) {
-      if (!inBatch[size_t(c)]) layout.clusters.push_back({s, c, base + m.taskStart[size_t(c)]});
-      if (m.taskStart[size_t(c) + 1] - m.taskStart[size_t(c)] > 1)
+      if (!inBatch[size_t(c)])
+        layout.clusters.push_back({s, c, base + m.taskStart[size_t(c)], grouped});
+      if (!grouped && m.taskStart[size_t(c) + 1] - m.taskStart[size_t(c)] > 1)
         for (int t = m.taskStart[size_t(c)]; t < m.taskStart[size_t(c) + 1]; ++t)
           layout.splitTasks.push_back(base + t);
     }
@@ -1156,11 +1173,18 @@ void World::Data::rebuildLayout() {
     // blocks that follow the clusters' split over threads read goals their own thread wrote.
     const int block = m.wholeBodyCluster ? kParticlesPerBlock : kClusteredParticlesPerBlock;
     for (int b = 0; b < n; b += block) layout.blocks.push_back({s, b, std::min(n, b + block)});
-    const int groups = static_cast<int>(m.groupStart.size()) - 1;
+    const int groups = m.groups.count();
     for (int g = 0; g < groups; g += kClusteredParticlesPerBlock)
       layout.groupBlocks.push_back({s, g, std::min(groups, g + kClusteredParticlesPerBlock)});
     state.groupRows.resize(size_t(groups));
     state.groupQuad.resize(size_t(groups));
+    if (grouped) {
+      for (int g = 0; g < groups; g += kClusteredParticlesPerBlock)
+        layout.momentGroupBlocks.push_back(
+            {s, g, std::min(groups, g + kClusteredParticlesPerBlock)});
+      state.groupMoments.resize(size_t(groups));
+      state.groupRef.resize(size_t(groups));
+    }
     layout.members += static_cast<long long>(m.members.size());
     layout.particles += n;
   }
@@ -1375,7 +1399,9 @@ const BodyParams& World::params(BodyHandle h) const {
 void World::setParams(BodyHandle h, const BodyParams& p) {
   BodySlot& s = d_->slot(h);
   validateParams(p);
-  if (usesBatches(*s.model, p) != usesBatches(*s.model, s.params)) d_->layoutDirty = true;
+  if (usesBatches(*s.model, p) != usesBatches(*s.model, s.params) ||
+      usesGroupedMoments(*s.model, p) != usesGroupedMoments(*s.model, s.params))
+    d_->layoutDirty = true;
   s.params = p;
 }
 
