@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 #include <random>
 
+#include "../sim/tet_bar.h"
 #include "sim/cluster_batch.h"
 #include "sim/parallel.h"
 #include "sim/world.h"
@@ -99,26 +100,8 @@ BENCHMARK(BM_OverlappingClusters)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)
 void BM_TetBar(benchmark::State& state) {
   setThreadCount(int(state.range(0)));
   World world(settings(5));
-  BodyDef def;
-  const int nx = 30, ny = 5, nz = 5;
-  def.positions = gridPoints(nx, ny, nz, 0.02);
+  BodyDef def = test::tetBar(30, 5, 5, 0.02);
   def.params.mode = Mode::Linear;
-  def.clusters.kind = ClusterDef::Kind::Explicit;
-  auto id = [&](int i, int j, int k) { return (k * ny + j) * nx + i; };
-  for (int k = 0; k + 1 < nz; ++k)
-    for (int j = 0; j + 1 < ny; ++j)
-      for (int i = 0; i + 1 < nx; ++i) {
-        const int c[8] = {id(i, j, k),         id(i + 1, j, k),        id(i, j + 1, k),
-                          id(i + 1, j + 1, k), id(i, j, k + 1),        id(i + 1, j, k + 1),
-                          id(i, j + 1, k + 1), id(i + 1, j + 1, k + 1)};
-        // Five tetrahedra per cube.
-        def.clusters.clusters.push_back({c[0], c[1], c[2], c[4]});
-        def.clusters.clusters.push_back({c[1], c[3], c[2], c[7]});
-        def.clusters.clusters.push_back({c[1], c[4], c[5], c[7]});
-        def.clusters.clusters.push_back({c[2], c[4], c[7], c[6]});
-        def.clusters.clusters.push_back({c[1], c[2], c[4], c[7]});
-      }
-  def.pinned = {id(0, 0, 0), id(0, ny - 1, 0), id(0, 0, nz - 1), id(0, ny - 1, nz - 1)};
   const BodyHandle b = world.addBody(def);
   state.counters["clusters"] = world.clusterCount(b);
   runSteps(state, world, double(def.positions.size()), double(def.clusters.clusters.size()) * 4.0);
@@ -130,26 +113,13 @@ BENCHMARK(BM_TetBar)->Arg(1)->Arg(2)->Iterations(600)->Unit(benchmark::kMicrosec
 // rest shape, each turned by its own rotation and stretched up to 10 %, warm-started 0.03 rad
 // from the answer (about one sub-step of a fast-spinning cluster). Counter: ns per cluster.
 void BM_SmallClusterKernel(benchmark::State& state) {
-  const int nx = 30, ny = 5, nz = 5;
-  const std::vector<Vec3> rest = gridPoints(nx, ny, nz, 0.02);
-  auto id = [&](int i, int j, int k) { return (k * ny + j) * nx + i; };
+  const BodyDef bar = test::tetBar(30, 5, 5, 0.02);
+  const std::vector<Vec3>& rest = bar.positions;
   std::vector<int> memberStart{0}, members;
-  for (int k = 0; k + 1 < nz; ++k)
-    for (int j = 0; j + 1 < ny; ++j)
-      for (int i = 0; i + 1 < nx; ++i) {
-        const int c[8] = {id(i, j, k),         id(i + 1, j, k),        id(i, j + 1, k),
-                          id(i + 1, j + 1, k), id(i, j, k + 1),        id(i + 1, j, k + 1),
-                          id(i, j + 1, k + 1), id(i + 1, j + 1, k + 1)};
-        const int tets[5][4] = {{c[0], c[1], c[2], c[4]},
-                                {c[1], c[3], c[2], c[7]},
-                                {c[1], c[4], c[5], c[7]},
-                                {c[2], c[4], c[7], c[6]},
-                                {c[1], c[2], c[4], c[7]}};
-        for (const auto& t : tets) {
-          members.insert(members.end(), t, t + 4);
-          memberStart.push_back(static_cast<int>(members.size()));
-        }
-      }
+  for (const std::vector<int>& tet : bar.clusters.clusters) {
+    members.insert(members.end(), tet.begin(), tet.end());
+    memberStart.push_back(static_cast<int>(members.size()));
+  }
   const int clusters = static_cast<int>(memberStart.size()) - 1;
   std::vector<float> r[3], w(rest.size(), 1.0f);
   for (const Vec3& p : rest)

@@ -10,6 +10,7 @@
 #include "sim/rotation.h"
 #include "sim/shape_matching.h"
 #include "test_util.h"
+#include "tet_bar.h"
 
 namespace sb {
 namespace {
@@ -293,26 +294,7 @@ TEST(ClusterBatch, LanesDoNotMix) {
 // A bar of tetrahedral four-particle clusters (5 per grid cube), pinned at one end: every cluster
 // goes through the batched kernel in rigid and linear mode without plastic flow.
 BodyDef tetBar(Mode mode, int nx) {
-  const int ny = 3, nz = 3;
-  BodyDef def;
-  for (int k = 0; k < nz; ++k)
-    for (int j = 0; j < ny; ++j)
-      for (int i = 0; i < nx; ++i) def.positions.push_back(0.05 * Vec3(i, j, k));
-  auto id = [&](int i, int j, int k) { return (k * ny + j) * nx + i; };
-  def.clusters.kind = ClusterDef::Kind::Explicit;
-  for (int k = 0; k + 1 < nz; ++k)
-    for (int j = 0; j + 1 < ny; ++j)
-      for (int i = 0; i + 1 < nx; ++i) {
-        const int c[8] = {id(i, j, k),         id(i + 1, j, k),        id(i, j + 1, k),
-                          id(i + 1, j + 1, k), id(i, j, k + 1),        id(i + 1, j, k + 1),
-                          id(i, j + 1, k + 1), id(i + 1, j + 1, k + 1)};
-        def.clusters.clusters.push_back({c[0], c[1], c[2], c[4]});
-        def.clusters.clusters.push_back({c[1], c[3], c[2], c[7]});
-        def.clusters.clusters.push_back({c[1], c[4], c[5], c[7]});
-        def.clusters.clusters.push_back({c[2], c[4], c[7], c[6]});
-        def.clusters.clusters.push_back({c[1], c[2], c[4], c[7]});
-      }
-  def.pinned = {id(0, 0, 0), id(0, ny - 1, 0), id(0, 0, nz - 1), id(0, ny - 1, nz - 1)};
+  BodyDef def = test::tetBar(nx, 3, 3, 0.05);
   def.params.mode = mode;
   def.params.alpha = 0.8;
   def.params.beta = 0.3;
