@@ -129,7 +129,7 @@ struct BodyState {
   std::vector<Eigen::Matrix<float, 12, 1>, Eigen::aligned_allocator<Eigen::Matrix<float, 12, 1>>>
       goalRows;
   std::vector<Eigen::Matrix<float, 3, 6>> goalQuad;
-  // Per particle group (BodyModel::groupOf): the sums of its clusters' goalRows and goalQuad,
+  // Per particle group (BodyModel::groups): the sums of its clusters' goalRows and goalQuad,
   // formed by the integration before it visits the particles.
   std::vector<Eigen::Matrix<float, 12, 1>, Eigen::aligned_allocator<Eigen::Matrix<float, 12, 1>>>
       groupRows;
