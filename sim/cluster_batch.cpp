@@ -4,8 +4,8 @@
 
 // The 32-byte vector helpers below are internal and always inlined (they must be: the kernel is
 // compiled for two targets whose ABIs pass such vectors differently, and an out-of-line helper
-// built for one would be called from the other). GCC's ABI note for them does not apply.
-#pragma GCC diagnostic ignored "-Wpsabi"
+// built for one would be called from the other). GCC's ABI note for them does not apply; the
+// file is built with -Wno-psabi (sim/CMakeLists.txt).
 
 namespace sb {
 
