@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "sim/shape_matching.h"
+
 // The 32-byte vector helpers below are internal and always inlined (they must be: the kernel is
 // compiled for two targets whose ABIs pass such vectors differently, and an out-of-line helper
 // built for one would be called from the other). GCC's ABI note for them does not apply; the
@@ -22,10 +24,6 @@ constexpr int kMaxRotationSteps = 12;
 // Smallest pivot of the Hessian that counts as positive definite, relative to A scaled to a
 // largest entry of 1.
 constexpr float kDefiniteMargin = 1e-6f;
-// Same bounds as the general path (shape_matching.cpp): restoring volume never scales a fit by
-// more than 1/0.8, and ‖A − R‖_F is capped at 2.
-constexpr float kMinVolumeScale = 0.8f;
-constexpr float kMaxFitDeparture = 2.0f;
 
 [[gnu::always_inline]] inline F8 splat(float v) {
   return F8{v, v, v, v, v, v, v, v};
@@ -379,8 +377,9 @@ matchClusterBatch(const ClusterBatch& batch, const ClusterBatchShape& shape,
     // Inverted or flat: no volume to restore, the rotation is the goal (as the general path).
     const I8 flat = ~(detA > splat(1e-12f) * size * size * size);
     if (params.preserveVolume) {
-      const F8 lo = splat(kMinVolumeScale * kMinVolumeScale * kMinVolumeScale);
-      const F8 hi = splat(1.0f / (kMinVolumeScale * kMinVolumeScale * kMinVolumeScale));
+      const float minScale = float(kMinVolumeScale);  // bounds shared with goalTransform
+      const F8 lo = splat(minScale * minScale * minScale);
+      const F8 hi = splat(1.0f / (minScale * minScale * minScale));
       F8 d = detA < lo ? lo : detA;
       d = d > hi ? hi : d;
       const F8 inv = one / cbrtNearOne(d);
@@ -391,7 +390,7 @@ matchClusterBatch(const ClusterBatch& batch, const ClusterBatchShape& shape,
       A.m[e] = select(flat, R.m[e], A.m[e]);
       dep2 += (A.m[e] - R.m[e]) * (A.m[e] - R.m[e]);
     }
-    const F8 limit = splat(kMaxFitDeparture);
+    const F8 limit = splat(float(kMaxFitDeparture));
     const F8 shrink = select(dep2 > limit * limit, limit / sqrt8(dep2), one);
     const F8 beta = splat(float(params.beta));
     for (int e = 0; e < 9; ++e) {

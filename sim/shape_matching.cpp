@@ -11,10 +11,6 @@ namespace {
 
 constexpr int kLanes = 8;    // independent float partial sums per accumulator (SIMD width)
 constexpr int kBlock = 512;  // members summed in float before the block total goes to double
-// Linear mode never enlarges a fit by more than 1/kMinVolumeScale to restore its volume.
-constexpr double kMinVolumeScale = 0.8;
-// ‖A − R‖_F of a linear fit is capped here: stretches up to about ×3 along an axis.
-constexpr double kMaxFitDeparture = 2.0;
 
 // Inlined into each target variant of accumulateMoments (below).
 template <bool kGather, bool kQuadratic>

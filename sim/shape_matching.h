@@ -43,6 +43,12 @@ ClusterMoments accumulateMoments(const ParticleColumns& p, const int* members, i
                                  const Eigen::Vector3f& ref, const Eigen::Vector3f& restCentre,
                                  bool quadratic);
 
+// Bounds of the linear goal (goalTransform and the batched kernel, cluster_batch.h): restoring
+// the volume never scales a fit by more than 1/kMinVolumeScale (nor less than kMinVolumeScale),
+// and ‖A − R‖_F is capped at kMaxFitDeparture (stretches up to about ×3 along an axis).
+constexpr double kMinVolumeScale = 0.8;
+constexpr double kMaxFitDeparture = 2.0;
+
 // Goal of a cluster for particle i, as a polynomial of its rest position rᵢ (body frame):
 //   gᵢ = L·rᵢ + Q·mono(rᵢ) + t.
 // Expressing goals in rᵢ (not in per-cluster offsets) lets a particle average the goals of all its

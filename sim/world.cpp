@@ -148,21 +148,14 @@ struct BodyState {
   bool lanesHoldState = false;
 };
 
-// Copies the batched clusters' reference points and rotations from `ref`/`rotation` into the
-// batch lanes (every lane, padding included), or back (lanes in use only).
-void lanesFromClusters(const BodyModel& m, BodyState& s) {
-  s.batchLanes.resize(m.batches.size());
-  for (size_t k = 0; k < m.batches.size(); ++k)
-    for (int l = 0; l < kBatchLanes; ++l) {
-      const size_t c = size_t(m.batches[k].cluster[l]);
-      ClusterBatchLanes& lanes = s.batchLanes[k];
-      for (int a = 0; a < 3; ++a) lanes.ref[a][l] = s.ref[c][a];
-      const Eigen::Quaterniond& q = s.rotation[c];
-      lanes.rotation[0][l] = float(q.w());
-      lanes.rotation[1][l] = float(q.x());
-      lanes.rotation[2][l] = float(q.y());
-      lanes.rotation[3][l] = float(q.z());
-    }
+// Cluster c's reference point and rotation into lane l, and back.
+void clusterToLane(const BodyState& s, size_t c, ClusterBatchLanes& lanes, int l) {
+  for (int a = 0; a < 3; ++a) lanes.ref[a][l] = s.ref[c][a];
+  const Eigen::Quaterniond& q = s.rotation[c];
+  lanes.rotation[0][l] = float(q.w());
+  lanes.rotation[1][l] = float(q.x());
+  lanes.rotation[2][l] = float(q.y());
+  lanes.rotation[3][l] = float(q.z());
 }
 
 void laneToCluster(const ClusterBatchLanes& lanes, int l, BodyState& s, size_t c) {
@@ -170,6 +163,15 @@ void laneToCluster(const ClusterBatchLanes& lanes, int l, BodyState& s, size_t c
   s.rotation[c] = Eigen::Quaterniond(lanes.rotation[0][l], lanes.rotation[1][l],
                                      lanes.rotation[2][l], lanes.rotation[3][l])
                       .normalized();
+}
+
+// Copies the batched clusters' reference points and rotations from `ref`/`rotation` into the
+// batch lanes (every lane, padding included), or back (lanes in use only).
+void lanesFromClusters(const BodyModel& m, BodyState& s) {
+  s.batchLanes.resize(m.batches.size());
+  for (size_t k = 0; k < m.batches.size(); ++k)
+    for (int l = 0; l < kBatchLanes; ++l)
+      clusterToLane(s, size_t(m.batches[k].cluster[l]), s.batchLanes[k], l);
 }
 
 void clustersFromLanes(const BodyModel& m, BodyState& s) {
@@ -632,11 +634,7 @@ void World::Data::computeGoals(double h, std::vector<char>& badBodies, StepProfi
         double unusedPlasticTime = 0;  // batched bodies have no plastic flow
         if (updateCluster(gb.slot, c, gb.firstTask + m.taskStart[c], false, &unusedPlasticTime))
           batchBad[size_t(i)] = 1;
-        for (int a = 0; a < 3; ++a) lanes.ref[a][l] = s.ref[c][a];
-        lanes.rotation[0][l] = float(s.rotation[c].w());
-        lanes.rotation[1][l] = float(s.rotation[c].x());
-        lanes.rotation[2][l] = float(s.rotation[c].y());
-        lanes.rotation[3][l] = float(s.rotation[c].z());
+        clusterToLane(s, c, lanes, l);
       } else {
         // goalQuad stays zero (set when the body entered the batches).
         Eigen::Matrix<float, 12, 1>& rows = s.goalRows[c];
@@ -1139,6 +1137,13 @@ void World::Data::collide() {
               });
 }
 
+namespace {
+// Pieces [0, count) of body `slot` in blocks of `size`.
+void appendBlocks(std::vector<ParticleBlock>& blocks, int slot, int count, int size) {
+  for (int b = 0; b < count; b += size) blocks.push_back({slot, b, std::min(count, b + size)});
+}
+}  // namespace
+
 void World::Data::rebuildLayout() {
   layout = WorkLayout{};
   for (int s : order) {
@@ -1172,16 +1177,13 @@ void World::Data::rebuildLayout() {
     // Clustered bodies in smaller blocks: a particle there costs a sum over its clusters, and
     // blocks that follow the clusters' split over threads read goals their own thread wrote.
     const int block = m.wholeBodyCluster ? kParticlesPerBlock : kClusteredParticlesPerBlock;
-    for (int b = 0; b < n; b += block) layout.blocks.push_back({s, b, std::min(n, b + block)});
+    appendBlocks(layout.blocks, s, n, block);
     const int groups = m.groups.count();
-    for (int g = 0; g < groups; g += kClusteredParticlesPerBlock)
-      layout.groupBlocks.push_back({s, g, std::min(groups, g + kClusteredParticlesPerBlock)});
+    appendBlocks(layout.groupBlocks, s, groups, kClusteredParticlesPerBlock);
     state.groupRows.resize(size_t(groups));
     state.groupQuad.resize(size_t(groups));
     if (grouped) {
-      for (int g = 0; g < groups; g += kClusteredParticlesPerBlock)
-        layout.momentGroupBlocks.push_back(
-            {s, g, std::min(groups, g + kClusteredParticlesPerBlock)});
+      appendBlocks(layout.momentGroupBlocks, s, groups, kClusteredParticlesPerBlock);
       state.groupMoments.resize(size_t(groups));
       state.groupRef.resize(size_t(groups));
     }
