@@ -12,10 +12,10 @@
 #include <CLI/CLI.hpp>
 
 #include "app/commands.h"
-#include "sim/cage/cage_validation.h"
+#include "sim/mesh/closed_surface.h"
 #include "sim/cage/embedding.h"
-#include "sim/cage/mesh_io.h"
-#include "sim/cage/triangle_mesh.h"
+#include "sim/mesh/mesh_io.h"
+#include "sim/mesh/triangle_mesh.h"
 
 namespace sb::app {
 
@@ -23,7 +23,7 @@ namespace {
 
 using cage::BindOptions;
 using cage::Embedding;
-using cage::TriangleMesh;
+using mesh::TriangleMesh;
 
 // Parses argv with app; returns -1 to continue, else the exit code (help: 0, error: 2).
 int parse(CLI::App& app, int argc, char** argv) {
@@ -89,11 +89,11 @@ int runBindCommand(int argc, char** argv) {
   if (const int rc = parse(app, argc, argv); rc >= 0) return rc;
 
   try {
-    const TriangleMesh mesh = cage::readMesh(meshPath);
-    const TriangleMesh cageMesh = cage::readMesh(cagePath);
+    const TriangleMesh mesh = mesh::readMesh(meshPath);
+    const TriangleMesh cageMesh = mesh::readMesh(cagePath);
     try {
-      cage::validateCage(cageMesh, cagePath);
-    } catch (const cage::CageError& e) {
+      mesh::validateClosedSurface(cageMesh, cagePath);
+    } catch (const mesh::SurfaceError& e) {
       std::fprintf(stderr, "bind: %s\n", e.what());
       return 1;
     }
@@ -123,9 +123,9 @@ int runBindCommand(int argc, char** argv) {
       std::printf("wrote:              %s\n", outPath.c_str());
     }
     return 0;
-  } catch (const cage::MeshError& e) {
+  } catch (const mesh::MeshError& e) {
     std::fprintf(stderr, "bind: %s\n", e.what());
-  } catch (const cage::CageError& e) {
+  } catch (const mesh::SurfaceError& e) {
     std::fprintf(stderr, "bind: %s\n", e.what());
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bind: %s\n", e.what());
@@ -146,9 +146,9 @@ int runDeformCommand(int argc, char** argv) {
   if (const int rc = parse(app, argc, argv); rc >= 0) return rc;
 
   try {
-    const TriangleMesh mesh = cage::readMesh(meshPath);
-    const TriangleMesh rest = cage::readMesh(cagePath);
-    const TriangleMesh moved = cage::readMesh(deformedPath);
+    const TriangleMesh mesh = mesh::readMesh(meshPath);
+    const TriangleMesh rest = mesh::readMesh(cagePath);
+    const TriangleMesh moved = mesh::readMesh(deformedPath);
     if (moved.vertices.size() != rest.vertices.size()) {
       std::fprintf(stderr, "deform: %s: has %zu vertices but the cage %s has %zu\n", deformedPath.c_str(),
                    moved.vertices.size(), cagePath.c_str(), rest.vertices.size());
@@ -164,8 +164,8 @@ int runDeformCommand(int argc, char** argv) {
       return 1;
     }
     try {
-      cage::validateCage(rest, cagePath);
-    } catch (const cage::CageError& e) {
+      mesh::validateClosedSurface(rest, cagePath);
+    } catch (const mesh::SurfaceError& e) {
       std::fprintf(stderr, "deform: %s\n", e.what());
       return 1;
     }
@@ -180,7 +180,7 @@ int runDeformCommand(int argc, char** argv) {
     out.triangles = mesh.triangles;
     out.vertices.resize(mesh.vertices.size());
     for (std::size_t i = 0; i < out.vertices.size(); ++i) out.vertices[i] = outD.row(static_cast<Eigen::Index>(i)).transpose();
-    cage::writeObj(outPath, out);
+    mesh::writeObj(outPath, out);
     std::printf("wrote %s (%zu vertices, %zu triangles)\n", outPath.c_str(), out.vertices.size(), out.triangles.size());
     return 0;
   } catch (const std::exception& e) {

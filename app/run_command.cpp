@@ -1,38 +1,50 @@
 // `softbody run`: steps a scene without a window, exports frames, prints per-phase timings.
 #include <CLI/CLI.hpp>
-#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <vector>
 
 #include "app/commands.h"
-#include "sim/frame_export.h"
-#include "sim/parallel.h"
-#include "sim/scene.h"
+#include "sim/base/parallel.h"
+#include "sim/scene/frame_export.h"
+#include "sim/scene/scene.h"
+#include "sim/scene/scene_runner.h"
+#include "sim/world/param_ranges.h"
 
 namespace sb::app {
 
 namespace {
 
-void printTimings(const StepProfile& sum, double deformSeconds, int steps, long long particles) {
+void printTimings(const RunTotals& totals, long long particles) {
+  const double steps = double(totals.steps);
   auto line = [&](const char* name, double seconds) {
     const double perStep = seconds / steps;
     std::printf("  %-11s %10.4f ms/step %10.2f ns/particle/step\n", name, perStep * 1e3,
                 particles > 0 ? perStep * 1e9 / double(particles) : 0.0);
   };
-  std::printf("timings per step phase (%d steps, %lld particles):\n", steps, particles);
-  line("external", sum.external);
-  line("goals", sum.goals);
-  line("plasticity", sum.plasticity);
-  line("integrate", sum.integrate);
-  line("damping", sum.damping);
-  line("contacts", sum.contacts);
-  line("collide", sum.collide);
-  line("check", sum.check);
-  line("deform", deformSeconds);
-  line("total", sum.total() + deformSeconds);
-  std::printf("%.1f steps per second (simulation%s)\n", steps / (sum.total() + deformSeconds),
-              deformSeconds > 0 ? " and render-mesh deform" : " only");
+  std::printf("timings per step phase (%lld steps, %lld particles):\n", totals.steps, particles);
+  for (Phase phase : kPhases) line(phaseName(phase), totals.phases[phase]);
+  line("deform", totals.deformSeconds);
+  line("total", totals.seconds());
+  std::printf("%.1f steps per second (simulation%s)\n", steps / totals.seconds(),
+              totals.deformSeconds > 0 ? " and render-mesh deform" : " only");
+}
+
+// A CLI11 check of a number against the range the World accepts (sim/world/param_ranges.h).
+CLI::Validator inRange(const ParamRange& range) {
+  return CLI::Validator(
+      [range](std::string& text) {
+        double v = 0;
+        try {
+          size_t used = 0;
+          v = std::stod(text, &used);
+          if (used != text.size()) return std::string("not a number: ") + text;
+        } catch (const std::exception&) {
+          return std::string("not a number: ") + text;
+        }
+        return rangeViolation(range, v);
+      },
+      describe(range));
 }
 
 }  // namespace
@@ -54,13 +66,13 @@ int runHeadlessCommand(int argc, char** argv) {
       ->required()
       ->check(CLI::Range(1, 100000000));
   cli.add_option("--dt", dt, "Seconds per step (overrides the scene's world.timeStep)")
-      ->check(CLI::Range(1e-7, 10.0));
+      ->check(inRange(limits::timeStep));
   cli.add_option("--substeps", substeps, "Sub-steps per step (overrides the scene)")
-      ->check(CLI::Range(1, 1000));
+      ->check(inRange(limits::substeps));
   cli.add_option("--export", exportDir, "Write a frame file per exported step into this folder");
   cli.add_option("--every", every, "Export every K-th step (default 1)")
       ->check(CLI::Range(1, 100000000));
-  cli.add_option("--format", format, "Frame format: obj or bin (see sim/frame_export.h)")
+  cli.add_option("--format", format, "Frame format: obj or bin (see sim/scene/frame_export.h)")
       ->check(CLI::IsMember({"obj", "bin"}));
   cli.add_option("--threads", threads, "Simulation threads (default: all cores)")
       ->check(CLI::Range(1, 256));
@@ -96,34 +108,21 @@ int runHeadlessCommand(int argc, char** argv) {
       return 1;
     }
   }
+  SceneRunner runner(scene, !noDeform);
   long long particles = 0, renderVertices = 0;
   for (const SceneBody& b : scene.bodies) particles += scene.world.particleCount(b.handle);
-  std::vector<PointsRowMajor> meshes(scene.bodies.size());
-  for (size_t i = 0; i < scene.bodies.size(); ++i) {
-    scene.renderVertices(int(i), meshes[i]);
-    renderVertices += meshes[i].rows();
-  }
+  for (const PointsRowMajor& mesh : runner.renderMeshes()) renderVertices += mesh.rows();
   std::printf(
       "%s: %zu bodies, %lld particles, %lld render vertices, dt %.6g s, %d substeps, "
       "%d threads\n",
       scenePath.c_str(), scene.bodies.size(), particles, renderVertices, settings.timeStep,
       settings.substeps, threadCount());
 
-  StepProfile sum;
-  double deformSeconds = 0;
-  long long contacts = 0;
   int exported = 0;
   for (int s = 1; s <= steps; ++s) {
-    scene.world.step();
-    sum += scene.world.lastProfile();
-    contacts += scene.world.lastContactCount();
-    if (!noDeform) {
-      const auto t0 = std::chrono::steady_clock::now();
-      scene.renderVerticesAll(meshes);
-      deformSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    }
-    for (const WorldEvent& e : scene.world.takeEvents())
+    runner.step([&](const WorldEvent& e) {
       std::fprintf(stderr, "softbody run: step %d: %s\n", s, e.message.c_str());
+    });
     if (!exportDir.empty() && s % every == 0) {
       char name[64];
       std::snprintf(name, sizeof name, "frame_%06d.%s", s, format.c_str());
@@ -144,8 +143,9 @@ int runHeadlessCommand(int argc, char** argv) {
   if (!exportDir.empty()) std::printf("exported %d frames to %s\n", exported, exportDir.c_str());
   std::printf("state hash %016llx after %.4f s simulated\n",
               static_cast<unsigned long long>(scene.world.stateHash()), scene.world.time());
-  std::printf("%.1f body-body contacts per sub-step on average\n", double(contacts) / steps);
-  printTimings(sum, deformSeconds, steps, particles);
+  std::printf("%.1f body-body contacts per sub-step on average\n",
+              double(runner.totals().contacts) / steps);
+  printTimings(runner.totals(), particles);
   return 0;
 }
 

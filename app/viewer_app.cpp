@@ -6,7 +6,6 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
-#include <map>
 #include <thread>
 
 #include <GLFW/glfw3.h>
@@ -20,7 +19,8 @@
 #include "render/ground_renderer.h"
 #include "render/mesh_buffer.h"
 #include "render/mesh_renderer.h"
-#include "sim/cage/normals.h"
+#include "sim/mesh/closed_surface.h"
+#include "sim/mesh/normals.h"
 
 namespace sb::app {
 
@@ -169,14 +169,10 @@ void ViewerApp::rebuildBodyViews() {
     v.mesh->setIndices(v.triangles.data(), tris.size());
     v.colour = kBodyPalette[i % (sizeof kBodyPalette / sizeof kBodyPalette[0])];
     // Unique cage edges, in a fixed order.
-    std::map<std::pair<int, int>, bool> edges;
-    for (const auto& t : body.cageTriangles)
-      for (int c = 0; c < 3; ++c) {
-        const int a = t[c], b = t[(c + 1) % 3];
-        edges[{std::min(a, b), std::max(a, b)}] = true;
-      }
+    const int particles = scene_.world.particleCount(body.handle);
     v.cageEdges.clear();
-    for (const auto& e : edges) v.cageEdges.push_back(e.first);
+    for (const auto& e : mesh::buildSurfaceTopology(body.cageTriangles, particles).edges)
+      v.cageEdges.push_back({e[0], e[1]});
     refreshClusters(static_cast<int>(i));
   }
 }
@@ -277,7 +273,7 @@ void ViewerApp::updateMeshes() {
     // The cage module's normals (area weighted, unit); a vertex no triangle uses gets +y so the
     // shader never normalises a zero vector.
     PointsRowMajor normals;
-    cage::computeVertexNormals(scene_.renderTriangles(static_cast<int>(i)), v.vertices, normals);
+    mesh::computeVertexNormals(scene_.renderTriangles(static_cast<int>(i)), v.vertices, normals);
     v.normals.resize(n * 3);
     for (std::size_t k = 0; k < n; ++k) {
       Eigen::RowVector3f nk = normals.row(static_cast<Eigen::Index>(k));

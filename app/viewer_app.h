@@ -20,7 +20,7 @@
 
 #include "app/viewer_options.h"
 #include "render/orbit_camera.h"
-#include "sim/scene.h"
+#include "sim/scene/scene.h"
 
 struct GLFWwindow;
 

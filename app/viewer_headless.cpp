@@ -4,32 +4,29 @@
 
 #include <chrono>
 #include <cstdio>
-#include <fstream>
 
 #include <nlohmann/json.hpp>
 
-#include "sim/scene.h"
+#include "sim/base/file_io.h"
+#include "sim/scene/scene.h"
+#include "sim/scene/scene_runner.h"
 
 namespace sb::app {
 
 int runViewerHeadless(Scene& scene, const ViewerOptions& options) {
   const int steps = options.frames > 0 ? options.frames : 300;
   World& world = scene.world;
-  long events = 0;
-  StepProfile phases;
+  SceneRunner runner(scene, /*deform=*/false);
   const auto start = std::chrono::steady_clock::now();
-  for (int s = 0; s < steps; ++s) {
-    world.step();
-    phases += world.lastProfile();
-    for (const WorldEvent& e : world.takeEvents()) {
-      ++events;
+  for (int s = 0; s < steps; ++s)
+    runner.step([&](const WorldEvent& e) {
       std::printf("  event: %s: %s\n", world.contains(e.body) ? world.name(e.body).c_str() : "world",
                   e.message.c_str());
-    }
-  }
+    });
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::printf("softbody (headless): %d steps, %.3f s simulated, %.3f ms per step, %ld event(s)\n",
+  const long long events = runner.totals().events;
+  std::printf("softbody (headless): %d steps, %.3f s simulated, %.3f ms per step, %lld event(s)\n",
               steps, world.time(), 1e3 * seconds / steps, events);
   nlohmann::json bodies = nlohmann::json::array();
   for (const SceneBody& body : scene.bodies) {
@@ -44,11 +41,16 @@ int runViewerHeadless(Scene& scene, const ViewerOptions& options) {
     j["headless"] = true;
     j["steps"] = steps;
     j["simTime"] = world.time();
-    j["msPerStep"] = {{"total", 1e3 * phases.total() / steps},
+    j["msPerStep"] = {{"total", 1e3 * runner.totals().phases.total() / steps},
                       {"wall", 1e3 * seconds / steps}};
     j["events"] = events;
     j["bodies"] = bodies;
-    std::ofstream(options.statsPath) << j.dump(2) << "\n";
+    try {
+      writeFileAtomic(options.statsPath, [&](std::ostream& out) { out << j.dump(2) << "\n"; });
+    } catch (const FileError& e) {
+      std::fprintf(stderr, "softbody: cannot write the stats file: %s\n", e.what());
+      return 1;
+    }
   }
   return 0;
 }

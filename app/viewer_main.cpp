@@ -8,8 +8,8 @@
 #include "app/commands.h"
 #include "app/viewer_headless.h"
 #include "app/viewer_options.h"
-#include "sim/parallel.h"
-#include "sim/scene.h"
+#include "sim/base/parallel.h"
+#include "sim/scene/scene.h"
 
 #ifdef SOFTBODY_HAVE_VIEWER
 #include <GLFW/glfw3.h>

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "app/viewer_app.h"
+#include "sim/base/file_io.h"
 #include "render/picking.h"
 
 namespace sb::app {
@@ -38,12 +39,10 @@ void ViewerApp::writeStats(const std::string& path) const {
                      {"render", timings_.renderSum / frames},
                      {"frame", timings_.frameSum / std::max(frames - 1.0, 1.0)}};
   const StepProfile& p = timings_.phaseSum;
-  j["msPerStep"] = {
-      {"external", 1e3 * p.external / steps},     {"goals", 1e3 * p.goals / steps},
-      {"plasticity", 1e3 * p.plasticity / steps}, {"integrate", 1e3 * p.integrate / steps},
-      {"damping", 1e3 * p.damping / steps},       {"contacts", 1e3 * p.contacts / steps},
-      {"collide", 1e3 * p.collide / steps},       {"check", 1e3 * p.check / steps},
-      {"total", 1e3 * p.total() / steps}};
+  json perStep = json::object();
+  for (Phase phase : kPhases) perStep[phaseName(phase)] = 1e3 * p[phase] / steps;
+  perStep["total"] = 1e3 * p.total() / steps;
+  j["msPerStep"] = perStep;
   j["steps"] = timings_.steps;
   j["events"] = eventCount_;
   j["error"] = errorMessage_;
@@ -116,17 +115,11 @@ void ViewerApp::writeStats(const std::string& path) const {
   }
   j["bodies"] = bodies;
 
-  const std::string temporary = path + ".tmp";
-  {
-    std::ofstream out(temporary);
-    out << j.dump(2) << "\n";
-    if (!out) {
-      std::fprintf(stderr, "softbody: cannot write stats file %s\n", temporary.c_str());
-      return;
-    }
+  try {
+    writeFileAtomic(path, [&](std::ostream& out) { out << j.dump(2) << "\n"; });
+  } catch (const FileError& e) {
+    std::fprintf(stderr, "softbody: cannot write the stats file: %s\n", e.what());
   }
-  if (std::rename(temporary.c_str(), path.c_str()) != 0)
-    std::fprintf(stderr, "softbody: cannot rename %s to %s\n", temporary.c_str(), path.c_str());
 }
 
 }  // namespace sb::app

@@ -292,11 +292,17 @@ void ViewerApp::drawTimingPanel() {
   const double ms = 1000.0;
   ImGui::Text("simulation %.3f ms  (last step() %.3f ms)", timings_.lastSim, p.total() * ms);
   tooltip("Wall time of this frame's World::step() calls, and the phases of the last one.");
-  ImGui::Text("  external %.3f  goals %.3f  plastic %.3f", p.external * ms, p.goals * ms,
-              p.plasticity * ms);
-  ImGui::Text("  integrate %.3f  damping %.3f", p.integrate * ms, p.damping * ms);
-  ImGui::Text("  contacts %.3f (%d)  collide %.3f  check %.3f", p.contacts * ms,
-              scene_.world.lastContactCount(), p.collide * ms, p.check * ms);
+  // Every phase of the step, two to a line.
+  for (int i = 0; i < kPhaseCount; i += 2) {
+    const Phase a = kPhases[size_t(i)];
+    if (i + 1 < kPhaseCount) {
+      const Phase b = kPhases[size_t(i) + 1];
+      ImGui::Text("  %-10s %.3f  %-10s %.3f", phaseName(a), p[a] * ms, phaseName(b), p[b] * ms);
+    } else {
+      ImGui::Text("  %-10s %.3f", phaseName(a), p[a] * ms);
+    }
+  }
+  ImGui::Text("  body-body contacts: %d", scene_.world.lastContactCount());
   ImGui::Text("deform %.3f ms   render %.3f ms", timings_.lastDeform, timings_.lastRender);
   tooltip(
       "deform: render vertices = W x particles, plus smooth normals.\n"

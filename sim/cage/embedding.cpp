@@ -1,6 +1,5 @@
 #include "sim/cage/embedding.h"
 
-#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -22,10 +21,13 @@
 #include <Eigen/Geometry>
 #include <Eigen/SparseCore>
 
-#include "sim/cage/cage_validation.h"
+#include "sim/base/file_io.h"
 #include "sim/cage/mvc.h"
+#include "sim/mesh/closed_surface.h"
 
 namespace sb::cage {
+
+using mesh::TriangleMesh;
 
 namespace {
 
@@ -97,6 +99,10 @@ struct Reader {
   }
 };
 
+// Largest weight file load() reads (a dense bind of 1M mesh vertices to a 1,000-vertex cage in
+// double precision is 8 GB): a bound on what a damaged or hostile cache entry can make it read.
+constexpr std::uint64_t kMaxFileBytes = std::uint64_t(16) << 30;
+
 // Stats are stored as a fixed list of doubles.
 std::vector<double> statsToList(const BindStats& s) {
   return {s.seconds, static_cast<double>(s.threads), s.fromCache ? 1.0 : 0.0, s.minWeight, s.maxWeight,
@@ -125,27 +131,14 @@ BindStats statsFromList(const std::vector<double>& v) {
 }
 constexpr std::size_t kStatsCount = 15;
 
-void writeFileAtomic(const std::string& path, const std::string& data) {
-  // Create the directory (e.g. a fresh cache directory); failures surface when opening.
+// The bind cache's folder may not exist yet (a fresh cache directory).
+void writeCacheFile(const std::string& path, const std::string& data) {
   std::error_code ec;
   const std::filesystem::path parent = std::filesystem::path(path).parent_path();
-  if (!parent.empty()) std::filesystem::create_directories(parent, ec);
-  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error(path + ": cannot create " + tmp + ": " + std::strerror(errno));
+  if (!parent.empty()) std::filesystem::create_directories(parent, ec);  // failures surface below
+  writeFileAtomic(path, [&](std::ostream& out) {
     out.write(data.data(), static_cast<std::streamsize>(data.size()));
-    out.flush();
-    if (!out) {
-      std::remove(tmp.c_str());
-      throw std::runtime_error(path + ": write failed");
-    }
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const std::string why = std::strerror(errno);
-    std::remove(tmp.c_str());
-    throw std::runtime_error(path + ": cannot rename " + tmp + ": " + why);
-  }
+  });
 }
 
 // Prunes one row in place (see BindOptions::pruneThreshold). q_j = (v_j − x) / L.
@@ -406,20 +399,15 @@ void Embedding::save(const std::string& path, const std::array<std::uint64_t, 2>
     }
   }
   put(data, checksum(data));
-  writeFileAtomic(path, data);
+  writeCacheFile(path, data);
 }
 
 Embedding Embedding::load(const std::string& path, std::array<std::uint64_t, 2>* key) {
   std::string data;
-  {
-    std::FILE* f = std::fopen(path.c_str(), "rb");
-    if (!f) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
-    char buf[1 << 16];
-    std::size_t got;
-    while ((got = std::fread(buf, 1, sizeof(buf), f)) > 0) data.append(buf, got);
-    const bool bad = std::ferror(f) != 0;
-    std::fclose(f);
-    if (bad) throw std::runtime_error(path + ": read error");
+  try {
+    data = readFileBounded(path, kMaxFileBytes);
+  } catch (const FileError& e) {
+    throw std::runtime_error(e.what());
   }
   if (data.size() < 8 + 8 * 8 || std::memcmp(data.data(), kMagic, 8) != 0)
     throw std::runtime_error(path + ": not a softbody weight file (bad magic)");
@@ -517,7 +505,7 @@ std::string bindCachePath(const std::string& cacheDir, const std::array<std::uin
 }
 
 Embedding bindMeanValue(const std::vector<Vec3>& points, const TriangleMesh& cage, const BindOptions& options) {
-  validateCage(cage, "cage");
+  mesh::validateClosedSurface(cage, "cage");
   for (std::size_t i = 0; i < points.size(); ++i) {
     if (!points[i].allFinite()) throw std::invalid_argument("bind: point " + std::to_string(i) + " is not finite");
   }

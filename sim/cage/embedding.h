@@ -12,8 +12,8 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 
-#include "sim/cage/triangle_mesh.h"
-#include "sim/types.h"
+#include "sim/base/types.h"
+#include "sim/mesh/triangle_mesh.h"
 
 namespace sb::cage {
 
@@ -89,7 +89,8 @@ class Embedding {
   double pruningError() const { return stats_.pruningError; }
 
   // Binary file (format in README.md) with a checksum; save is atomic (temp file + rename).
-  // load throws std::runtime_error on any inconsistency (bad magic, size, checksum, index).
+  // load throws std::runtime_error on any inconsistency (bad magic, size, checksum, index), and
+  // reads only regular files of at most 16 GB (sim/base/file_io.h).
   void save(const std::string& path, const std::array<std::uint64_t, 2>& key = {0, 0}) const;
   static Embedding load(const std::string& path, std::array<std::uint64_t, 2>* key = nullptr);
 
@@ -108,13 +109,13 @@ class Embedding {
 
 // The cache key: a 128-bit hash of the points, the cage vertices and triangles and the options
 // that change the result (storage rule, threshold, precision), plus the file format version.
-std::array<std::uint64_t, 2> bindCacheKey(const std::vector<Eigen::Vector3d>& points, const TriangleMesh& cage,
+std::array<std::uint64_t, 2> bindCacheKey(const std::vector<Eigen::Vector3d>& points, const mesh::TriangleMesh& cage,
                                           const BindOptions& options);
 std::string bindCachePath(const std::string& cacheDir, const std::array<std::uint64_t, 2>& key);
 
-// Validates the cage (throws CageError), then computes mean value coordinates of every point.
+// Validates the cage (throws mesh::SurfaceError), then computes mean value coordinates of every point.
 // With options.cacheDir set, reuses a cached bind with the same key, else binds and writes it.
-Embedding bindMeanValue(const std::vector<Eigen::Vector3d>& points, const TriangleMesh& cage,
+Embedding bindMeanValue(const std::vector<Eigen::Vector3d>& points, const mesh::TriangleMesh& cage,
                         const BindOptions& options = {});
 
 }  // namespace sb::cage

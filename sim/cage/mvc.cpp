@@ -1,13 +1,17 @@
 #include "sim/cage/mvc.h"
 
+#include "sim/mesh/closed_surface.h"
+#include "sim/mesh/closest_point.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <map>
 
 #include <Eigen/Geometry>
 
 namespace sb::cage {
+
+using mesh::TriangleMesh;
 
 namespace {
 using Vec3 = Eigen::Vector3d;
@@ -51,56 +55,34 @@ inline double angleOf(double s, double c) {
 }
 }  // namespace
 
-double closestPointBarycentric(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c,
-                               std::array<double, 3>& bary) {
-  // Ericson, Real-Time Collision Detection, 5.1.5 (Voronoi regions of the triangle).
-  const Vec3 ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0.0 && d2 <= 0.0) {
-    bary = {1.0, 0.0, 0.0};
-    return ap.norm();
+namespace {
+
+// Distance from p to the closest point q of triangle (a, b, c): measured along the face normal in
+// the face region (accurate a hair off the face), else from the point on the edge or vertex.
+double distanceToTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c,
+                          const mesh::TrianglePoint<double>& q) {
+  switch (q.feature) {
+    case mesh::TriangleFeature::Face: {
+      const Vec3 n = (b - a).cross(c - a);
+      return std::abs((p - a).dot(n)) / n.norm();
+    }
+    case mesh::TriangleFeature::Edge0:
+      return (p - (a + q.weights[1] * (b - a))).norm();
+    case mesh::TriangleFeature::Edge1:
+      return (p - (b + q.weights[2] * (c - b))).norm();
+    case mesh::TriangleFeature::Edge2:
+      return (p - (a + q.weights[2] * (c - a))).norm();
+    case mesh::TriangleFeature::Vertex0:
+      return (p - a).norm();
+    case mesh::TriangleFeature::Vertex1:
+      return (p - b).norm();
+    case mesh::TriangleFeature::Vertex2:
+      return (p - c).norm();
   }
-  const Vec3 bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0.0 && d4 <= d3) {
-    bary = {0.0, 1.0, 0.0};
-    return bp.norm();
-  }
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
-    const double v = d1 / (d1 - d3);
-    bary = {1.0 - v, v, 0.0};
-    return (p - (a + v * ab)).norm();
-  }
-  const Vec3 cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0.0 && d5 <= d6) {
-    bary = {0.0, 0.0, 1.0};
-    return cp.norm();
-  }
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
-    const double w = d2 / (d2 - d6);
-    bary = {1.0 - w, 0.0, w};
-    return (p - (a + w * ac)).norm();
-  }
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
-    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-    bary = {0.0, 1.0 - w, w};
-    return (p - (b + w * (c - b))).norm();
-  }
-  // Inside the face region: barycentrics from the sub-triangle areas, computed with cross
-  // products (accurate for points near the face, unlike the dot-product form).
-  const Vec3 n = ab.cross(ac);
-  const double nn = n.dot(n);
-  const double wa = (b - p).cross(c - p).dot(n) / nn;
-  const double wb = (c - p).cross(a - p).dot(n) / nn;
-  const double wc = 1.0 - wa - wb;
-  bary = {wa, wb, wc};
-  const double h = std::abs(ap.dot(n)) / std::sqrt(nn);
-  return h;
+  return (p - a).norm();
 }
+
+}  // namespace
 
 MeanValueCage::MeanValueCage(const TriangleMesh& cage) {
   const std::size_t nv = cage.vertices.size();
@@ -117,21 +99,20 @@ MeanValueCage::MeanValueCage(const TriangleMesh& cage) {
   diagonal_ = nv ? box.diagonal().norm() : 0.0;
   centre_ = nv ? Vec3(box.center()) : Vec3::Zero();
 
-  std::map<std::pair<int, int>, int> edgeIndex;
+  // Edges from the shared adjacency (one undirected edge per pair of triangles).
+  const mesh::SurfaceTopology topology =
+      mesh::buildSurfaceTopology(cage.triangles, static_cast<int>(nv));
+  edges_ = topology.edges;
   tris_.reserve(cage.triangles.size());
-  for (const auto& t : cage.triangles) {
+  for (std::size_t ti = 0; ti < cage.triangles.size(); ++ti) {
+    const auto& t = cage.triangles[ti];
     Tri tri;
     tri.v = t;
     for (int k = 0; k < 3; ++k) {
-      const int a = t[(k + 1) % 3], b = t[(k + 2) % 3];
-      const auto key = std::make_pair(std::min(a, b), std::max(a, b));
-      auto it = edgeIndex.find(key);
-      if (it == edgeIndex.end()) {
-        it = edgeIndex.emplace(key, static_cast<int>(edges_.size())).first;
-        edges_.push_back({key.first, key.second});
-      }
-      tri.e[k] = it->second;
-      tri.sign[k] = (a == key.first) ? 1.0 : -1.0;
+      // The edge opposite corner k runs from corner k+1 to k+2: the topology's edge k+1.
+      const int a = t[(k + 1) % 3];
+      tri.e[k] = topology.triangleEdges[ti][(k + 1) % 3];
+      tri.sign[k] = (a == edges_[tri.e[k]][0]) ? 1.0 : -1.0;
     }
     const Vec3 p0 = cage.vertices[t[0]], p1 = cage.vertices[t[1]], p2 = cage.vertices[t[2]];
     const Vec3 n = (p1 - p0).cross(p2 - p0);
@@ -329,8 +310,9 @@ bool MeanValueCage::weights(const Vec3& x, double* w, Scratch& sc, MvcInfo* info
     if (sc.nearPlane[ti]) {
       const Vec3 p0 = vertex(t.v[0]), p1 = vertex(t.v[1]), p2 = vertex(t.v[2]);
       const double h = t.normal.dot(p0 - x);
-      std::array<double, 3> bary;
-      const double rho = closestPointBarycentric(x, p0, p1, p2, bary);
+      const mesh::TrianglePoint<double> closest = mesh::closestPointOnTriangle(x, p0, p1, p2);
+      const Vec3& bary = closest.weights;
+      const double rho = distanceToTriangle(x, p0, p1, p2, closest);
       if (rho <= onTol) {
         // On the cage: the weights are the triangle's barycentric coordinates.
         std::fill(w, w + nv, 0.0);

@@ -7,7 +7,7 @@
 
 #include <Eigen/Core>
 
-#include "sim/cage/triangle_mesh.h"
+#include "sim/mesh/triangle_mesh.h"
 
 namespace sb::cage {
 
@@ -36,7 +36,7 @@ struct MvcInfo {
 // Construct from a validated cage (bindMeanValue validates; this class does not).
 class MeanValueCage {
  public:
-  explicit MeanValueCage(const TriangleMesh& cage);
+  explicit MeanValueCage(const mesh::TriangleMesh& cage);
 
   int vertexCount() const { return static_cast<int>(vx_.size()); }
   double diagonal() const { return diagonal_; }
@@ -79,12 +79,7 @@ class MeanValueCage {
 
 // Stateless convenience: prepares the cage and evaluates one point (slow for many points).
 // w must hold cage.vertices.size() values.
-bool mvcWeights(const Eigen::Vector3d& x, const TriangleMesh& cage, double* w, MvcInfo* info = nullptr);
-
-// Barycentric coordinates of the point of triangle (a, b, c) closest to p; returns the distance.
-double closestPointBarycentric(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
-                               const Eigen::Vector3d& b, const Eigen::Vector3d& c,
-                               std::array<double, 3>& bary);
+bool mvcWeights(const Eigen::Vector3d& x, const mesh::TriangleMesh& cage, double* w, MvcInfo* info = nullptr);
 
 // Tolerances, all relative (see README.md).
 inline constexpr double kOnCageTolerance = 1e-13;  // × cage diagonal: snap to vertex / face

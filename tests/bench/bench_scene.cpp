@@ -4,28 +4,24 @@
 // over the timed steps, and steps_per_s for simulation + deform together.
 #include <benchmark/benchmark.h>
 
-#include <chrono>
-
-#include "sim/cage/mesh_io.h"
-#include "sim/parallel.h"
-#include "sim/scene.h"
+#include "sim/mesh/mesh_io.h"
+#include "sim/base/parallel.h"
+#include "sim/scene/scene.h"
+#include "sim/scene/scene_runner.h"
 
 namespace sb {
 namespace {
 
 const std::string kAssets = SOFTBODY_ASSET_DIR;
 
-void reportPhases(benchmark::State& state, const StepProfile& sum, double deformSeconds,
-                  long long contacts, long long steps) {
-  const double perStep = 1e3 / double(steps);
-  state.counters["goals_ms"] = sum.goals * perStep;
-  state.counters["integrate_ms"] = sum.integrate * perStep;
-  state.counters["damping_ms"] = sum.damping * perStep;
-  state.counters["contacts_ms"] = sum.contacts * perStep;
-  state.counters["collide_ms"] = sum.collide * perStep;
-  state.counters["deform_ms"] = deformSeconds * perStep;
-  state.counters["steps_per_s"] = double(steps) / (sum.total() + deformSeconds);
-  state.counters["contacts_per_substep"] = double(contacts) / double(steps);
+// Every phase of the step (step_phases.h) as "<phase>_ms", plus the deform and totals.
+void reportPhases(benchmark::State& state, const RunTotals& totals) {
+  const double perStep = 1e3 / double(totals.steps);
+  for (Phase phase : kPhases)
+    state.counters[std::string(phaseName(phase)) + "_ms"] = totals.phases[phase] * perStep;
+  state.counters["deform_ms"] = totals.deformSeconds * perStep;
+  state.counters["steps_per_s"] = double(totals.steps) / totals.seconds();
+  state.counters["contacts_per_substep"] = double(totals.contacts) / double(totals.steps);
   state.counters["threads"] = threadCount();
 }
 
@@ -35,25 +31,11 @@ void BM_LargeScene(benchmark::State& state) {
   setThreadCount(int(state.range(0)));
   Scene scene = loadScene(kAssets + "/scenes/large.json");
   for (int s = 0; s < 120; ++s) scene.world.step();
-  std::vector<PointsRowMajor> meshes(scene.bodies.size());
+  SceneRunner runner(scene, /*deform=*/true);
   long long renderVertices = 0;
-  for (size_t i = 0; i < meshes.size(); ++i) {
-    scene.renderVertices(int(i), meshes[i]);
-    renderVertices += meshes[i].rows();
-  }
-  StepProfile sum;
-  double deformSeconds = 0;
-  long long contacts = 0, steps = 0;
-  for (auto _ : state) {
-    scene.world.step();
-    const auto t0 = std::chrono::steady_clock::now();
-    scene.renderVerticesAll(meshes);
-    deformSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    sum += scene.world.lastProfile();
-    contacts += scene.world.lastContactCount();
-    ++steps;
-  }
-  reportPhases(state, sum, deformSeconds, contacts, steps);
+  for (const PointsRowMajor& mesh : runner.renderMeshes()) renderVertices += mesh.rows();
+  for (auto _ : state) runner.step();
+  reportPhases(state, runner.totals());
   state.counters["bodies"] = double(scene.bodies.size());
   state.counters["render_vertices"] = double(renderVertices);
   setThreadCount(0);
@@ -71,7 +53,7 @@ BENCHMARK(BM_LargeScene)
 void BM_ContactScaling(benchmark::State& state) {
   setThreadCount(int(state.range(1)));
   const int count = int(state.range(0));
-  const cage::TriangleMesh cage = cage::readMesh(kAssets + "/meshes/bunny_cage.obj");
+  const mesh::TriangleMesh cage = mesh::readMesh(kAssets + "/meshes/bunny_cage.obj");
   WorldSettings settings;
   settings.timeStep = 1.0 / 60;
   settings.substeps = 4;
@@ -91,16 +73,16 @@ void BM_ContactScaling(benchmark::State& state) {
     world.addBody(def);
   }
   for (int s = 0; s < 120; ++s) world.step();
-  StepProfile sum;
-  long long contacts = 0, steps = 0;
+  RunTotals totals;
   for (auto _ : state) {
     world.step();
-    sum += world.lastProfile();
-    contacts += world.lastContactCount();
-    ++steps;
+    totals.phases += world.lastProfile();
+    totals.contacts += world.lastContactCount();
+    ++totals.steps;
   }
-  reportPhases(state, sum, 0.0, contacts, steps);
-  state.counters["contacts_us_per_body"] = 1e6 * sum.contacts / double(steps) / count;
+  reportPhases(state, totals);
+  state.counters["contacts_us_per_body"] =
+      1e6 * totals.phases[Phase::Contacts] / double(totals.steps) / count;
   setThreadCount(0);
 }
 BENCHMARK(BM_ContactScaling)

@@ -8,9 +8,9 @@
 #include <random>
 
 #include "../sim/tet_bar.h"
-#include "sim/cluster_batch.h"
-#include "sim/parallel.h"
-#include "sim/world.h"
+#include "sim/world/matching/cluster_batch.h"
+#include "sim/base/parallel.h"
+#include "sim/world/world.h"
 
 namespace sb {
 namespace {
@@ -158,7 +158,7 @@ void BM_SmallClusterKernel(benchmark::State& state) {
                                     memberRest[2].data()};
   // Batches index the private copies.
   std::vector<ClusterBatch> batches =
-      buildClusterBatches(memberStart, copies, memberRestCols, memberWeight.data(), restModels);
+      buildClusterBatches(Csr{memberStart, copies}, memberRestCols, memberWeight.data(), restModels);
   std::vector<ClusterBatchShape> shapes(batches.size());
   std::vector<ClusterBatchLanes> start(batches.size());
   for (size_t b = 0; b < batches.size(); ++b)

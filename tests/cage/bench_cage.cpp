@@ -11,14 +11,15 @@
 #include <vector>
 
 #include "sim/cage/embedding.h"
-#include "sim/cage/mesh_io.h"
+#include "sim/mesh/mesh_io.h"
 #include "sim/cage/mvc.h"
-#include "sim/cage/normals.h"
-#include "tests/cage/cage_fixtures.h"
+#include "sim/mesh/normals.h"
+#include "tests/mesh/mesh_fixtures.h"
 
 namespace {
 
 using namespace sb::cage;
+using namespace sb::mesh;
 using Vec3 = Eigen::Vector3d;
 
 std::vector<Vec3> randomPointsInBox(int n, const Vec3& lo, const Vec3& hi, unsigned seed) {

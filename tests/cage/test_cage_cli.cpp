@@ -13,10 +13,11 @@
 #include <Eigen/Dense>
 
 #include "sim/cage/embedding.h"
-#include "sim/cage/mesh_io.h"
-#include "tests/cage/cage_fixtures.h"
+#include "sim/mesh/mesh_io.h"
+#include "tests/mesh/mesh_fixtures.h"
 
 namespace sb::cage {
+using namespace sb::mesh;  // meshes, mesh files, surfaces
 namespace {
 
 namespace fs = std::filesystem;

@@ -13,13 +13,14 @@
 
 #include <Eigen/Dense>
 
-#include "sim/cage/cage_validation.h"
+#include "sim/mesh/closed_surface.h"
 #include "sim/cage/embedding.h"
-#include "sim/cage/mesh_io.h"
-#include "sim/cage/normals.h"
-#include "tests/cage/cage_fixtures.h"
+#include "sim/mesh/mesh_io.h"
+#include "sim/mesh/normals.h"
+#include "tests/mesh/mesh_fixtures.h"
 
 namespace sb::cage {
+using namespace sb::mesh;  // meshes, mesh files, surfaces
 namespace {
 
 namespace fs = std::filesystem;
@@ -177,7 +178,7 @@ TEST(Bind, AutoStorageRule) {
 TEST(Bind, InvalidCageBindsNothing) {
   TriangleMesh cage = testing::makeBox(1, 1, 1);
   std::swap(cage.triangles[3][0], cage.triangles[3][1]);
-  EXPECT_THROW(bindMeanValue({Vec3(0.5, 0.5, 0.5)}, cage), CageError);
+  EXPECT_THROW(bindMeanValue({Vec3(0.5, 0.5, 0.5)}, cage), SurfaceError);
 }
 
 TEST(Bind, DeterministicAcrossThreadCounts) {
@@ -305,7 +306,7 @@ TEST_F(CacheTest, ReuseRebindOnChangeAndCorruption) {
     other.triangles[t] = {a[0], a[1], ob};
     other.triangles[t + 1] = {a[0], ob, a[2]};
   }
-  ASSERT_NO_THROW(validateCage(other, "other"));
+  ASSERT_NO_THROW(validateClosedSurface(other, "other"));
   EXPECT_NE(bindCacheKey(pts, other, o), bindCacheKey(pts, cage, o));
   const Embedding third = bindMeanValue(pts, other, o);
   EXPECT_FALSE(third.stats().fromCache);

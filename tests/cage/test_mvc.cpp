@@ -9,12 +9,13 @@
 #include <random>
 #include <vector>
 
-#include "sim/cage/cage_validation.h"
-#include "sim/cage/mesh_io.h"
+#include "sim/mesh/closed_surface.h"
+#include "sim/mesh/mesh_io.h"
 #include "sim/cage/mvc.h"
-#include "tests/cage/cage_fixtures.h"
+#include "tests/mesh/mesh_fixtures.h"
 
 namespace sb::cage {
+using namespace sb::mesh;  // meshes, mesh files, surfaces
 namespace {
 
 using testing::diagonal;
@@ -109,7 +110,7 @@ bool insideNamed(const std::string& name, const Vec3& p) {
 }
 
 TEST(CageFixtures, GeneratedCagesAreValid) {
-  for (const auto& c : generatedCages()) EXPECT_NO_THROW(validateCage(c.cage, c.name)) << c.name;
+  for (const auto& c : generatedCages()) EXPECT_NO_THROW(validateClosedSurface(c.cage, c.name)) << c.name;
   EXPECT_EQ(testing::makeBox(6, 6, 20).vertices.size(), 554u);
   EXPECT_EQ(testing::makeBox(24, 24, 80).vertices.size(), 8834u);
 }
@@ -424,7 +425,7 @@ TEST(Mvc, NearDegenerateTrianglesGiveNoNaN) {
     tris.push_back({m, c11, c01});
     tris.push_back({m, c01, c00});
     cage.triangles = tris;
-    ASSERT_NO_THROW(validateCage(cage, "sliver"));
+    ASSERT_NO_THROW(validateClosedSurface(cage, "sliver"));
     const MeanValueCage mc(cage);
     for (const Vec3& x : {Vec3(0.5, 0.5, 0.5), Vec3(0.5, 0.0, 0.5), Vec3(0.5, 0.0, 1.0), Vec3(0.5, 0.5 * eps, 1.0),
                           Vec3(0.5, 0.5 * eps, 1.0 + 1e-9), Vec3(0.5, -1e-9, 1.0 - 1e-9), Vec3(0.3, 1e-3, 0.999),
@@ -479,7 +480,7 @@ TEST(Mvc, RealMeshesInsideTheirCages) {
                                            {"suzanne.obj", "suzanne_cage.obj"}}) {
     const TriangleMesh mesh = readMesh(std::string(SOFTBODY_TEST_MESH_DIR) + "/" + meshName);
     const TriangleMesh cage = readMesh(std::string(SOFTBODY_TEST_MESH_DIR) + "/" + cageName);
-    ASSERT_NO_THROW(validateCage(cage, cageName));
+    ASSERT_NO_THROW(validateClosedSurface(cage, cageName));
     const MeanValueCage mc(cage);
     MeanValueCage::Scratch s;
     std::vector<double> w(cage.vertices.size());

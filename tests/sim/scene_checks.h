@@ -6,7 +6,7 @@
 #include <array>
 #include <vector>
 
-#include "sim/scene.h"
+#include "sim/scene/scene.h"
 
 namespace sb::test {
 

@@ -5,10 +5,10 @@
 #include <cmath>
 #include <random>
 
-#include "sim/cluster_batch.h"
-#include "sim/parallel.h"
-#include "sim/rotation.h"
-#include "sim/shape_matching.h"
+#include "sim/world/matching/cluster_batch.h"
+#include "sim/base/parallel.h"
+#include "sim/world/matching/rotation.h"
+#include "sim/world/matching/shape_matching.h"
 #include "test_util.h"
 #include "tet_bar.h"
 
@@ -111,7 +111,7 @@ std::vector<LaneResult> runBatches(const SmallClusters& s, const BodyParams& par
   const float* memberRest[3] = {s.memberRest[0].data(), s.memberRest[1].data(),
                                 s.memberRest[2].data()};
   const std::vector<ClusterBatch> batches =
-      buildClusterBatches(s.memberStart, s.members, memberRest, s.memberWeight.data(), s.rest);
+      buildClusterBatches(Csr{s.memberStart, s.members}, memberRest, s.memberWeight.data(), s.rest);
   std::vector<LaneResult> out(s.rest.size());
   const float* x[3] = {s.x[0].data(), s.x[1].data(), s.x[2].data()};
   for (const ClusterBatch& batch : batches) {
@@ -156,7 +156,7 @@ TEST(ClusterBatch, GroupsSmallClustersInOrderAndPadsWithZeroWeight) {
   const float* memberRest[3] = {s.memberRest[0].data(), s.memberRest[1].data(),
                                 s.memberRest[2].data()};
   const std::vector<ClusterBatch> batches =
-      buildClusterBatches(s.memberStart, s.members, memberRest, s.memberWeight.data(), s.rest);
+      buildClusterBatches(Csr{s.memberStart, s.members}, memberRest, s.memberWeight.data(), s.rest);
   ASSERT_EQ(batches.size(), 3u);  // 8 + 8 + 5
   int next = 0;
   for (const ClusterBatch& b : batches) {
@@ -188,7 +188,7 @@ TEST(ClusterBatch, ClustersLargerThanABatchAllowsAreLeftToTheGeneralPath) {
   const float* memberRest[3] = {q.data(), q.data(), q.data()};
   const std::vector<ClusterRestModel> rest(3);
   const std::vector<ClusterBatch> batches =
-      buildClusterBatches(memberStart, members, memberRest, w.data(), rest);
+      buildClusterBatches(Csr{memberStart, members}, memberRest, w.data(), rest);
   ASSERT_EQ(batches.size(), 1u);
   EXPECT_EQ(batches[0].count, 2);
   EXPECT_EQ(batches[0].cluster[0], 0);

@@ -3,13 +3,13 @@
 // copy of the kernel for the baseline alone, under other names, and compares it with the one the
 // library dispatches to on this machine, on inputs that take every branch (saddles, inverted
 // clusters, volume clamps, non-finite lanes).
-#include "sim/cluster_batch.h"
+#include "sim/world/matching/cluster_batch.h"
 
 #define SB_CLUSTER_BATCH_BASELINE
 #define buildClusterBatches baselineBuildClusterBatches
 #define setBatchShapeLane baselineSetBatchShapeLane
 #define matchClusterBatch baselineMatchClusterBatch
-#include "sim/cluster_batch.cpp"
+#include "sim/world/matching/cluster_batch.cpp"
 #undef buildClusterBatches
 #undef setBatchShapeLane
 #undef matchClusterBatch

@@ -9,12 +9,12 @@
 #include <random>
 
 #include "scene_checks.h"
-#include "sim/body_contact.h"
-#include "sim/cage/mesh_io.h"
-#include "sim/mass_properties.h"
-#include "sim/parallel.h"
-#include "sim/surface_geometry.h"
-#include "sim/surface_grid.h"
+#include "sim/world/contact/body_contact.h"
+#include "sim/mesh/mesh_io.h"
+#include "sim/world/mass_properties.h"
+#include "sim/base/parallel.h"
+#include "sim/mesh/closed_surface.h"
+#include "sim/world/contact/surface_grid.h"
 #include "test_util.h"
 
 namespace sb {
@@ -22,6 +22,8 @@ namespace {
 
 using test::pointTriangleDistance;
 using test::windingNumber;
+using mesh::Triangle;
+using mesh::TriangleFeature;
 
 const std::string kBunnyCage = std::string(SOFTBODY_ASSET_DIR) + "/meshes/bunny_cage.obj";
 
@@ -32,7 +34,7 @@ struct Shape {
 };
 
 Shape bunnyCage(double scale, const Vec3& centre, const Mat3& rotation = Mat3::Identity()) {
-  const cage::TriangleMesh mesh = cage::readMesh(kBunnyCage);
+  const mesh::TriangleMesh mesh = mesh::readMesh(kBunnyCage);
   Vec3 mean = Vec3::Zero();
   for (const Vec3& v : mesh.vertices) mean += v;
   mean /= double(mesh.vertices.size());
@@ -135,7 +137,7 @@ TEST(SurfaceGeometry, ClosestPointMatchesExactDistance) {
     Vec3f a = rnd(), b = rnd(), c = rnd();
     if (trial % 5 == 0) c = a + 0.999f * (b - a) + 1e-3f * rnd();  // needle triangles
     const Vec3f p = 2.0f * rnd();
-    const TrianglePoint q = closestPointOnTriangle(p, a, b, c);
+    const mesh::TrianglePoint<float> q = mesh::closestPointOnTriangle(p, a, b, c);
     ASSERT_GE(q.weights.minCoeff(), 0.0f);
     ASSERT_NEAR(q.weights.sum(), 1.0f, 1e-5f);
     const Vec3f closest = q.weights[0] * a + q.weights[1] * b + q.weights[2] * c;
@@ -164,8 +166,8 @@ TEST(SurfaceGeometry, PseudoNormalSideAgreesWithWindingNumber) {
     xd.row(i) = s.points[size_t(i)].transpose();
     xf.row(i) = s.points[size_t(i)].transpose().cast<float>();
   }
-  const SurfaceTopology topology = buildSurfaceTopology(s.triangles, n);
-  for (const Triangle& t : topology.neighbours) ASSERT_GE(std::min({t[0], t[1], t[2]}), 0);
+  const mesh::SurfaceTopology topology = mesh::buildSurfaceTopology(s.triangles, n);
+  for (const auto& t : topology.neighbours) ASSERT_GE(std::min({t[0], t[1], t[2]}), 0);
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> u(-0.7, 0.7);
   std::normal_distribution<double> g(0.0, 0.01);
@@ -179,13 +181,13 @@ TEST(SurfaceGeometry, PseudoNormalSideAgreesWithWindingNumber) {
     if (std::abs(std::abs(w) - 0.5) < 0.05) continue;  // on the surface: no defined side
     float best = 1e30f;
     int bestT = -1;
-    TrianglePoint bestQ{};
+    mesh::TrianglePoint<float> bestQ{};
     Vec3f bestC = Vec3f::Zero();
     const Vec3f pf = p.cast<float>();
     for (size_t t = 0; t < s.triangles.size(); ++t) {
       const Vec3f a = xf.row(s.triangles[t][0]), b = xf.row(s.triangles[t][1]),
                   c = xf.row(s.triangles[t][2]);
-      const TrianglePoint q = closestPointOnTriangle(pf, a, b, c);
+      const mesh::TrianglePoint<float> q = mesh::closestPointOnTriangle(pf, a, b, c);
       const Vec3f cp = q.weights[0] * a + q.weights[1] * b + q.weights[2] * c;
       if ((pf - cp).squaredNorm() < best) {
         best = (pf - cp).squaredNorm();
@@ -195,7 +197,7 @@ TEST(SurfaceGeometry, PseudoNormalSideAgreesWithWindingNumber) {
       }
     }
     if (std::sqrt(best) < 1e-4f) continue;  // too close to the surface for float to decide
-    const Vec3f side = pseudoNormal(s.triangles, topology, xf.col(0).data(), xf.col(1).data(),
+    const Vec3f side = mesh::pseudoNormal(s.triangles, topology, xf.col(0).data(), xf.col(1).data(),
                                     xf.col(2).data(), bestT, bestQ.feature);
     const bool pseudoInside = (pf - bestC).dot(side) < 0.0f;
     ASSERT_EQ(pseudoInside, std::abs(w) > 0.5) << "point " << p.transpose() << " w " << w;
@@ -247,7 +249,7 @@ TEST(MassProperties, ClosedForms) {
     z.push_back(float(c.z() + (k & 4 ? 1 : -1)));
     m.push_back(1.0f);
   }
-  const MassProperties cube = massProperties(x.data(), y.data(), z.data(), m.data(), 8);
+  const MassProperties cube = massProperties(PointColumns{{x.data(), y.data(), z.data()}}, m.data(), 8);
   EXPECT_DOUBLE_EQ(cube.mass, 8.0);
   EXPECT_LT((cube.centre - c).norm(), 1e-12);
   EXPECT_LT((cube.inertia - 16.0 * Mat3::Identity()).norm(), 1e-10);
@@ -256,7 +258,7 @@ TEST(MassProperties, ClosedForms) {
   const float lx[2] = {float(c.x() - 1), float(c.x() + 1)};
   const float ly[2] = {float(c.y()), float(c.y())}, lz[2] = {float(c.z()), float(c.z())};
   const float lm[2] = {1.0f, 1.0f};
-  const MassProperties line = massProperties(lx, ly, lz, lm, 2);
+  const MassProperties line = massProperties(PointColumns{{lx, ly, lz}}, lm, 2);
   EXPECT_LT((line.inertia - Vec3(0, 2, 2).asDiagonal().toDenseMatrix()).norm(), 1e-12);
   EXPECT_LT((line.inverseInertia - Vec3(0, 0.5, 0.5).asDiagonal().toDenseMatrix()).norm(), 1e-9);
 }
@@ -324,7 +326,7 @@ TEST(Contact, FastBodyDoesNotTunnel) {
   }
   EXPECT_LT(world.centreOfMass(hs).x(), world.centreOfMass(hb).x());  // stayed on its side
   EXPECT_LT(world.linearMomentum(hs).x(), 0.0);                       // bounced back
-  EXPECT_LT(deepest, 0.05 * meanEdgeLength(small.triangles, small.points) + 0.02);
+  EXPECT_LT(deepest, 0.05 * mesh::meanEdgeLength(small.triangles, small.points) + 0.02);
 }
 
 // A cube dropped on another on the floor comes to rest on top of it, still.
@@ -347,7 +349,7 @@ TEST(Contact, StackSettlesWithoutJitter) {
     const Eigen::MatrixX3d x1 = test::toDouble(w.positions(ht));
     SCOPED_TRACE(modeName(mode));
     EXPECT_LT((x1 - x0).rowwise().norm().maxCoeff(), 1e-3 * 0.6 * std::sqrt(3.0));
-    const double spacing = meanEdgeLength(top.triangles, top.points);
+    const double spacing = mesh::meanEdgeLength(top.triangles, top.points);
     EXPECT_LT(deepestInside(w, ht, hb, bottom.triangles), 0.05 * spacing);
     EXPECT_LT(deepestInside(w, hb, ht, top.triangles), 0.05 * spacing);
     // Resting on the bottom cube (top face at 1 m), not on the floor beside it.

@@ -3,13 +3,13 @@
 // second copy for the baseline alone, under other names, and compares it with the one the
 // library dispatches to on this machine, for every variant (gathered or not, linear or
 // quadratic, small and multi-block clusters).
-#include "sim/shape_matching.h"
+#include "sim/world/matching/shape_matching.h"
 
 #define SB_SHAPE_MATCHING_BASELINE
 #define accumulateMoments baselineAccumulateMoments
 #define fitCluster baselineFitCluster
 #define goalTransform baselineGoalTransform
-#include "sim/shape_matching.cpp"
+#include "sim/world/matching/shape_matching.cpp"
 #undef accumulateMoments
 #undef fitCluster
 #undef goalTransform

@@ -5,8 +5,8 @@
 #include <random>
 #include <set>
 
-#include "sim/cluster_layout.h"
-#include "sim/particle_groups.h"
+#include "sim/world/matching/cluster_layout.h"
+#include "sim/world/matching/particle_groups.h"
 #include "test_util.h"
 
 namespace sb {
@@ -66,7 +66,7 @@ Body gridBody() {
 
 ParticleGroups groupsOf(const Body& b) {
   const float* rest[3] = {b.r[0].data(), b.r[1].data(), b.r[2].data()};
-  return buildParticleGroups(b.n, b.particleStart, b.particleClusters,
+  return buildParticleGroups(b.n, Csr{b.particleStart, b.particleClusters},
                              static_cast<int>(b.lists.size()), rest, b.w.data());
 }
 
@@ -76,10 +76,9 @@ TEST(ParticleGroups, GridCellsBecomeGroupsAndClustersAreUnionsOfGroups) {
   ASSERT_FALSE(g.empty());
   EXPECT_EQ(g.count(), 64);  // 4×4×4 cells of 27 points
   for (int k = 0; k < g.count(); ++k) {
-    const std::vector<int> clusters(g.clusters.begin() + g.clusterStart[size_t(k)],
-                                    g.clusters.begin() + g.clusterStart[size_t(k) + 1]);
-    for (int e = g.particleStart[size_t(k)]; e < g.particleStart[size_t(k) + 1]; ++e) {
-      const int p = g.particles[size_t(e)];
+    const std::vector<int> clusters(g.clusters.begin(k), g.clusters.end(k));
+    for (const int* e = g.particles.begin(k); e != g.particles.end(k); ++e) {
+      const int p = *e;
       EXPECT_EQ(g.groupOf[size_t(p)], k);
       const std::vector<int> own(b.particleClusters.begin() + b.particleStart[size_t(p)],
                                  b.particleClusters.begin() + b.particleStart[size_t(p) + 1]);
@@ -88,11 +87,8 @@ TEST(ParticleGroups, GridCellsBecomeGroupsAndClustersAreUnionsOfGroups) {
   }
   for (size_t c = 0; c < b.lists.size(); ++c) {
     std::set<int> fromGroups;
-    for (int e = g.clusterGroupStart[c]; e < g.clusterGroupStart[c + 1]; ++e) {
-      const int k = g.clusterGroups[size_t(e)];
-      for (int q = g.particleStart[size_t(k)]; q < g.particleStart[size_t(k) + 1]; ++q)
-        fromGroups.insert(g.particles[size_t(q)]);
-    }
+    for (const int* e = g.clusterGroups.begin(int(c)); e != g.clusterGroups.end(int(c)); ++e)
+      fromGroups.insert(g.particles.begin(*e), g.particles.end(*e));
     EXPECT_EQ(fromGroups, std::set<int>(b.lists[c].begin(), b.lists[c].end())) << "cluster " << c;
   }
 }
@@ -126,11 +122,11 @@ TEST(ParticleGroups, ClusterMomentsFromGroupsEqualTheDirectSum) {
   std::vector<ClusterMoments> groupMoments(size_t(g.count()));
   std::vector<Eigen::Vector3f> groupRef(size_t(g.count()));
   for (int k = 0; k < g.count(); ++k) {
-    const int first = g.particles[size_t(g.particleStart[size_t(k)])];
+    const int first = *g.particles.begin(k);
     groupRef[size_t(k)] =
         Eigen::Vector3f(b.x[0][size_t(first)], b.x[1][size_t(first)], b.x[2][size_t(first)]);
     groupMoments[size_t(k)] = accumulateMoments(
-        cols, g.particles.data(), g.particleStart[size_t(k)], g.particleStart[size_t(k) + 1],
+        cols, g.particles.items.data(), g.particles.start[size_t(k)], g.particles.start[size_t(k) + 1],
         groupRef[size_t(k)], g.restCentre[size_t(k)], false);
   }
   for (size_t c = 0; c < b.lists.size(); ++c) {

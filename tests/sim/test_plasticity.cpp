@@ -1,8 +1,8 @@
 // Plasticity: yield threshold, creep, c_max bound, volume, time-step independence.
 #include <gtest/gtest.h>
 
-#include "sim/plasticity.h"
-#include "sim/shape_matching.h"
+#include "sim/world/matching/plasticity.h"
+#include "sim/world/matching/shape_matching.h"
 #include "test_util.h"
 
 namespace sb {

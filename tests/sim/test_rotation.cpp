@@ -3,7 +3,7 @@
 
 #include <random>
 
-#include "sim/rotation.h"
+#include "sim/world/matching/rotation.h"
 #include "test_util.h"
 
 namespace sb {

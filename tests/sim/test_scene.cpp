@@ -5,9 +5,9 @@
 #include <filesystem>
 #include <fstream>
 
-#include "sim/cage/mesh_io.h"
-#include "sim/frame_export.h"
-#include "sim/scene.h"
+#include "sim/mesh/mesh_io.h"
+#include "sim/scene/frame_export.h"
+#include "sim/scene/scene.h"
 
 namespace sb {
 namespace {
@@ -41,7 +41,7 @@ TEST(Scene, DefaultSceneLoadsWithBoundRenderMeshes) {
     scene.renderVertices(int(i), v);
     // At the start the particles are the placed cage, so by linear precision of mean value
     // coordinates the render vertices are the placed render mesh.
-    const cage::TriangleMesh mesh = cage::readMesh(kAssets + "/scenes/" + b.render->path);
+    const mesh::TriangleMesh mesh = mesh::readMesh(kAssets + "/scenes/" + b.render->path);
     ASSERT_EQ(v.rows(), int(mesh.vertices.size()));
     const Vec3 r = b.rotationDegrees * (M_PI / 180.0);
     const Mat3 R =

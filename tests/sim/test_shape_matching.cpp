@@ -4,8 +4,9 @@
 
 #include <random>
 
-#include "sim/cluster_layout.h"
-#include "sim/cluster_rest.h"
+#include "sim/world/matching/cluster_layout.h"
+#include "sim/base/linalg.h"
+#include "sim/world/matching/cluster_rest.h"
 #include "test_util.h"
 
 namespace sb {

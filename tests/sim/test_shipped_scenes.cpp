@@ -15,8 +15,8 @@
 
 #include "scene_checks.h"
 #include "sim/cage/embedding.h"
-#include "sim/plasticity.h"
-#include "sim/scene.h"
+#include "sim/world/matching/plasticity.h"
+#include "sim/scene/scene.h"
 
 // CI also runs the suite under AddressSanitizer (SOFTBODY_SANITIZE adds -fsanitize=address, which
 // GCC announces with __SANITIZE_ADDRESS__ and Clang through __has_feature).

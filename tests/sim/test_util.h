@@ -5,7 +5,7 @@
 #include <random>
 #include <vector>
 
-#include "sim/world.h"
+#include "sim/world/world.h"
 
 namespace sb::test {
 

@@ -2,7 +2,7 @@
 // shared by the simulation tests and benchmarks.
 #pragma once
 
-#include "sim/body_def.h"
+#include "sim/world/body_def.h"
 
 namespace sb::test {
 

@@ -1,0 +1,478 @@
+#include "sim/scene/scene.h"
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "sim/base/file_io.h"
+#include "sim/base/parallel_for.h"
+#include "sim/cage/embedding.h"
+#include "sim/mesh/mesh_io.h"
+#include "sim/world/param_ranges.h"
+
+namespace sb {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+// Largest scene file read (a scene lists bodies and settings; its meshes are separate files).
+constexpr std::uint64_t kMaxSceneBytes = 64ull << 20;
+
+namespace {
+
+// Reads one JSON object, remembering which keys were used so unknown (mistyped) keys can be
+// reported instead of silently ignored.
+class Fields {
+ public:
+  Fields(const json& j, std::string where, std::string file)
+      : j_(j), where_(std::move(where)), file_(std::move(file)) {
+    if (!j_.is_object()) fail("", "must be a JSON object");
+  }
+  [[noreturn]] void fail(const std::string& key, const std::string& reason) const {
+    std::string field = where_;
+    if (!key.empty()) field += (field.empty() ? "" : ".") + key;
+    throw SceneError(file_ + ": " + (field.empty() ? "" : field + ": ") + reason);
+  }
+  bool has(const std::string& key) {
+    used_.insert(key);
+    return j_.contains(key);
+  }
+  double number(const std::string& key, double fallback, const ParamRange& range) {
+    if (!has(key)) return fallback;
+    const json& v = j_.at(key);
+    if (!v.is_number()) fail(key, "must be a number");
+    const double d = v.get<double>();
+    const std::string violation = rangeViolation(range, d);
+    if (!violation.empty()) fail(key, violation);
+    return d;
+  }
+  int integer(const std::string& key, int fallback, const ParamRange& range) {
+    if (!has(key)) return fallback;
+    const json& v = j_.at(key);
+    if (!v.is_number_integer()) fail(key, "must be an integer");
+    const long long d = v.get<long long>();
+    if (!range.contains(double(d)))
+      fail(key, "must be in " + describe(range) + ", got " + std::to_string(d));
+    return static_cast<int>(d);
+  }
+  bool boolean(const std::string& key, bool fallback) {
+    if (!has(key)) return fallback;
+    if (!j_.at(key).is_boolean()) fail(key, "must be true or false");
+    return j_.at(key).get<bool>();
+  }
+  std::string text(const std::string& key, const std::string* fallback) {
+    if (!has(key)) {
+      if (!fallback) fail(key, "is required");
+      return *fallback;
+    }
+    if (!j_.at(key).is_string()) fail(key, "must be a string");
+    return j_.at(key).get<std::string>();
+  }
+  Vec3 vec3(const std::string& key, const Vec3& fallback, double limit = limits::coordinateLimit) {
+    if (!has(key)) return fallback;
+    const json& v = j_.at(key);
+    if (!v.is_array() || v.size() != 3) fail(key, "must be an array of 3 numbers");
+    Vec3 out;
+    for (int a = 0; a < 3; ++a) {
+      if (!v[size_t(a)].is_number()) fail(key, "must be an array of 3 numbers");
+      out[a] = v[size_t(a)].get<double>();
+      if (!(std::abs(out[a]) <= limit))
+        fail(key, "components must be finite and within ±" + formatNumber(limit));
+    }
+    return out;
+  }
+  const json& raw(const std::string& key) {
+    used_.insert(key);
+    return j_.at(key);
+  }
+  std::string where(const std::string& key) const {
+    return where_ + (where_.empty() ? "" : ".") + key;
+  }
+  const std::string& file() const { return file_; }
+  // Call after reading every known key.
+  void rejectUnknown() const {
+    for (auto it = j_.begin(); it != j_.end(); ++it)
+      if (!used_.count(it.key())) fail(it.key(), "unknown field");
+  }
+ private:
+  const json& j_;
+  std::string where_, file_;
+  std::set<std::string> used_;
+};
+
+Mat3 eulerDegrees(const Vec3& deg) {
+  const Vec3 r = deg * (M_PI / 180.0);
+  return (Eigen::AngleAxisd(r.z(), Vec3::UnitZ()) * Eigen::AngleAxisd(r.y(), Vec3::UnitY()) *
+          Eigen::AngleAxisd(r.x(), Vec3::UnitX()))
+      .toRotationMatrix();
+}
+
+std::string cacheDirectory() {
+  if (const char* env = std::getenv("SOFTBODY_CACHE_DIR")) return env;
+  if (const char* xdg = std::getenv("XDG_CACHE_HOME")) return std::string(xdg) + "/softbody";
+  if (const char* home = std::getenv("HOME")) return std::string(home) + "/.cache/softbody";
+  return "";
+}
+
+std::string resolve(const std::string& baseDir, const std::string& path) {
+  const fs::path p(path);
+  return p.is_absolute() || baseDir.empty() ? path : (fs::path(baseDir) / p).string();
+}
+
+// Offsets and coordinates of colliders.
+constexpr ParamRange kCoordinates{-limits::coordinateLimit, limits::coordinateLimit};
+
+Collider parseCollider(Fields& f) {
+  const std::string type = f.text("type", nullptr);
+  const double friction = f.number("friction", 0.5, limits::friction);
+  Collider c;
+  if (type == "plane") {
+    const Vec3 n = f.vec3("normal", Vec3::UnitY());
+    if (!(n.norm() > 0.0)) f.fail("normal", "must not be zero");
+    c = Collider::plane(n, f.number("offset", 0.0, kCoordinates), friction);
+  } else if (type == "box") {
+    const Vec3 half = f.vec3("halfExtents", Vec3::Constant(0.5));
+    if ((half.array() <= 0.0).any()) f.fail("halfExtents", "must be positive");
+    c = Collider::box(f.vec3("centre", Vec3::Zero()), half,
+                      eulerDegrees(f.vec3("rotationDegrees", Vec3::Zero(), limits::angleLimit)),
+                      friction);
+  } else if (type == "sphere") {
+    c = Collider::sphere(f.vec3("centre", Vec3::Zero()), f.number("radius", 0.5, limits::radius),
+                         friction);
+  } else if (type == "capsule") {
+    c = Collider::capsule(f.vec3("a", Vec3::Zero()), f.vec3("b", Vec3::UnitY()),
+                          f.number("radius", 0.5, limits::radius), friction);
+  } else {
+    f.fail("type", "must be plane, box, sphere or capsule, got '" + type + "'");
+  }
+  f.rejectUnknown();
+  return c;
+}
+
+ClusterDef parseClusters(Fields& f) {
+  ClusterDef d;
+  const std::string single = "single";
+  const std::string kind = f.text("kind", &single);
+  if (kind == "single") {
+    d.kind = ClusterDef::Kind::Single;
+  } else if (kind == "grid") {
+    d.kind = ClusterDef::Kind::Grid;
+    d.cellSize = f.number("cellSize", d.cellSize, limits::cellSize);
+    d.overlap = f.number("overlap", d.overlap, limits::overlap);
+  } else if (kind == "explicit") {
+    d.kind = ClusterDef::Kind::Explicit;
+    if (!f.has("clusters")) f.fail("clusters", "is required for explicit clusters");
+    const json& list = f.raw("clusters");
+    if (!list.is_array()) f.fail("clusters", "must be an array of arrays of particle indices");
+    for (const json& c : list) {
+      if (!c.is_array()) f.fail("clusters", "must be an array of arrays of particle indices");
+      std::vector<int> members;
+      for (const json& i : c) {
+        if (!i.is_number_integer()) f.fail("clusters", "particle indices must be integers");
+        members.push_back(i.get<int>());
+      }
+      d.clusters.push_back(std::move(members));
+    }
+  } else {
+    f.fail("kind", "must be single, grid or explicit, got '" + kind + "'");
+  }
+  f.rejectUnknown();
+  return d;
+}
+
+// Render meshes already bound while loading one scene, by (cage file, render file, render path
+// as written): bodies that use the same pair share one embedding, so 50 copies of a bunny hold
+// one weight matrix (and the deform reads it from cache instead of memory).
+using BoundMeshes = std::map<std::array<std::string, 3>, std::shared_ptr<RenderMesh>>;
+
+SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMeshes& bound) {
+  SceneBody sb;
+  const std::string defaultName = "body";
+  def.name = f.text("name", &defaultName);
+  sb.meshPath = f.text("mesh", nullptr);
+  const std::string none;
+  const std::string renderPath = f.text("renderMesh", &none);
+  sb.translation = f.vec3("translation", Vec3::Zero());
+  sb.rotationDegrees = f.vec3("rotationDegrees", Vec3::Zero(), limits::angleLimit);
+  sb.scale = f.number("scale", 1.0, limits::scale);
+  sb.totalMass = f.number("mass", 1.0, limits::bodyMass);
+  def.totalMass = sb.totalMass;
+  def.velocity = f.vec3("velocity", Vec3::Zero(), limits::speedLimit);
+  Mode mode = Mode::Linear;
+  const std::string linear = "linear";
+  const std::string modeText = f.text("mode", &linear);
+  if (!parseMode(modeText, &mode))
+    f.fail("mode", "must be rigid, linear or quadratic, got '" + modeText + "'");
+  def.params.mode = mode;
+  def.params.alpha = f.number("alpha", def.params.alpha, limits::alpha);
+  def.params.beta = f.number("beta", def.params.beta, limits::beta);
+  def.params.preserveVolume = f.boolean("preserveVolume", def.params.preserveVolume);
+  def.params.damping = f.number("damping", def.params.damping, limits::damping);
+  sb.contact = f.boolean("contact", true);
+  if (f.has("plasticity")) {
+    Fields p(f.raw("plasticity"), f.where("plasticity"), f.file());
+    def.params.plasticity.yield = p.number("yield", 0.0, limits::plasticYield);
+    def.params.plasticity.creep = p.number("creep", 0.0, limits::plasticCreep);
+    def.params.plasticity.max = p.number("max", 0.5, limits::plasticMax);
+    p.rejectUnknown();
+  }
+  if (f.has("clusters")) {
+    Fields c(f.raw("clusters"), f.where("clusters"), f.file());
+    def.clusters = parseClusters(c);
+  }
+  if (f.has("pinned")) {
+    const json& p = f.raw("pinned");
+    if (!p.is_array()) f.fail("pinned", "must be an array of particle indices");
+    for (const json& i : p) {
+      if (!i.is_number_integer()) f.fail("pinned", "particle indices must be integers");
+      def.pinned.push_back(i.get<int>());
+    }
+  }
+  f.rejectUnknown();
+
+  // Particles: the mesh's vertices, scaled, rotated and placed.
+  mesh::TriangleMesh mesh;
+  try {
+    mesh = mesh::readMesh(resolve(baseDir, sb.meshPath));
+  } catch (const std::exception& e) {
+    f.fail("mesh", e.what());
+  }
+  if (mesh.vertices.empty()) f.fail("mesh", "'" + sb.meshPath + "' has no vertices");
+  const Mat3 R = eulerDegrees(sb.rotationDegrees);
+  def.positions.clear();
+  for (const Vec3& v : mesh.vertices) def.positions.push_back(R * (sb.scale * v) + sb.translation);
+  sb.cageTriangles = mesh.triangles;
+  // The cage is the body's surface for body–body contact (the World checks it is closed).
+  if (sb.contact) def.surface = mesh.triangles;
+
+  const std::array<std::string, 3> renderKey{resolve(baseDir, sb.meshPath),
+                                             resolve(baseDir, renderPath), renderPath};
+  if (!renderPath.empty() && bound.count(renderKey)) {
+    sb.render = bound.at(renderKey);
+  } else if (!renderPath.empty()) {
+    mesh::TriangleMesh detail;
+    try {
+      detail = mesh::readMesh(resolve(baseDir, renderPath));
+    } catch (const std::exception& e) {
+      f.fail("renderMesh", e.what());
+    }
+    cage::BindOptions options;
+    options.cacheDir = cacheDirectory();
+    options.warning = [](const std::string&) {};  // a cache problem only costs a rebind
+    auto render = std::make_shared<RenderMesh>();
+    render->path = renderPath;
+    render->triangles = detail.triangles;
+    try {
+      // Mean value coordinates are invariant under similarity transforms: bind in file
+      // coordinates so the cache is shared by every placement of the same mesh.
+      render->embedding =
+          std::make_shared<cage::Embedding>(cage::bindMeanValue(detail.vertices, mesh, options));
+    } catch (const std::exception& e) {
+      f.fail("mesh", std::string("cannot bind the render mesh to this cage: ") + e.what());
+    }
+    bound[renderKey] = render;
+    sb.render = std::move(render);
+  }
+  return sb;
+}
+
+}  // namespace
+
+Scene parseScene(const std::string& text, const std::string& name, const std::string& baseDir) {
+  json root;
+  try {
+    root = json::parse(text);
+  } catch (const json::parse_error& e) {
+    // nlohmann reports the byte offset; turn it into a line number for people.
+    const size_t upto = std::min<size_t>(e.byte, text.size());
+    const long line = 1 + std::count(text.begin(), text.begin() + long(upto), '\n');
+    throw SceneError(name + ": line " + std::to_string(line) + ": invalid JSON (" + e.what() + ")");
+  }
+  Fields top(root, "", name);
+  WorldSettings settings;
+  if (top.has("world")) {
+    Fields w(top.raw("world"), "world", name);
+    settings.gravity = w.vec3("gravity", settings.gravity, limits::gravityNorm.hi);
+    if (!limits::gravityNorm.contains(settings.gravity.norm()))
+      w.fail("gravity", "must be at most " + formatNumber(limits::gravityNorm.hi) +
+                            " m/s² long, got " + formatNumber(settings.gravity.norm()));
+    settings.timeStep = w.number("timeStep", settings.timeStep, limits::timeStep);
+    settings.substeps = w.integer("substeps", settings.substeps, limits::substeps);
+    settings.bodyContact = w.boolean("bodyContact", settings.bodyContact);
+    settings.contactFriction =
+        w.number("contactFriction", settings.contactFriction, limits::friction);
+    w.rejectUnknown();
+  }
+  Scene scene;
+  scene.world = World(settings);
+  if (top.has("colliders")) {
+    const json& list = top.raw("colliders");
+    if (!list.is_array()) top.fail("colliders", "must be an array");
+    for (size_t i = 0; i < list.size(); ++i) {
+      Fields c(list[i], "colliders[" + std::to_string(i) + "]", name);
+      const Collider collider = parseCollider(c);
+      try {
+        scene.world.addCollider(collider);
+      } catch (const std::invalid_argument& e) {
+        c.fail("", e.what());
+      }
+    }
+  }
+  if (!top.has("bodies")) top.fail("bodies", "is required (an array of bodies)");
+  const json& bodies = top.raw("bodies");
+  if (!bodies.is_array()) top.fail("bodies", "must be an array");
+  top.rejectUnknown();
+  BoundMeshes bound;
+  for (size_t i = 0; i < bodies.size(); ++i) {
+    const std::string where = "bodies[" + std::to_string(i) + "]";
+    Fields b(bodies[i], where, name);
+    BodyDef def;
+    SceneBody body = parseBody(b, baseDir, def, bound);
+    try {
+      body.handle = scene.world.addBody(def);
+    } catch (const std::invalid_argument& e) {
+      b.fail("", e.what());  // the World names the field
+    }
+    scene.bodies.push_back(std::move(body));
+  }
+  return scene;
+}
+
+Scene loadScene(const std::string& path) {
+  std::string text;
+  try {
+    text = readFileBounded(path, kMaxSceneBytes);
+  } catch (const FileError& e) {
+    throw SceneError(e.what());
+  }
+  Scene scene = parseScene(text, path, fs::path(path).parent_path().string());
+  scene.path = path;
+  return scene;
+}
+
+namespace {
+
+json vec(const Vec3& v) {
+  return json::array({v.x(), v.y(), v.z()});
+}
+
+// A path as written in the scene, re-expressed relative to the folder of the file being saved.
+std::string rebase(const std::string& path, const std::string& fromDir, const std::string& toDir) {
+  if (fs::path(path).is_absolute()) return path;
+  const fs::path absolute = fs::absolute(fs::path(fromDir.empty() ? "." : fromDir) / path);
+  std::error_code ec;
+  const fs::path rel = fs::relative(absolute, fs::absolute(toDir.empty() ? "." : toDir), ec);
+  return ec || rel.empty() ? absolute.string() : rel.string();
+}
+
+}  // namespace
+
+void saveScene(const Scene& scene, const std::string& path) {
+  const World& w = scene.world;
+  const std::string fromDir = fs::path(scene.path).parent_path().string();
+  const std::string toDir = fs::path(path).parent_path().string();
+  json root;
+  root["world"] = {{"gravity", vec(w.settings().gravity)},
+                   {"timeStep", w.settings().timeStep},
+                   {"substeps", w.settings().substeps},
+                   {"bodyContact", w.settings().bodyContact},
+                   {"contactFriction", w.settings().contactFriction}};
+  json colliders = json::array();
+  for (const Collider& c : w.colliders()) {
+    json j = {{"type", colliderShapeName(c.shape)}, {"friction", c.friction}};
+    switch (c.shape) {
+      case Collider::Shape::Plane:
+        j["normal"] = vec(c.normal);
+        j["offset"] = c.offset;
+        break;
+      case Collider::Shape::Box:
+        j["centre"] = vec(c.centre);
+        j["halfExtents"] = vec(c.halfExtents);
+        j["rotationDegrees"] = vec(c.rotation.eulerAngles(2, 1, 0).reverse() * (180.0 / M_PI));
+        break;
+      case Collider::Shape::Sphere:
+        j["centre"] = vec(c.centre);
+        j["radius"] = c.radius;
+        break;
+      case Collider::Shape::Capsule:
+        j["a"] = vec(c.centre - c.axis);
+        j["b"] = vec(c.centre + c.axis);
+        j["radius"] = c.radius;
+        break;
+    }
+    colliders.push_back(j);
+  }
+  root["colliders"] = colliders;
+  json bodies = json::array();
+  for (const SceneBody& b : scene.bodies) {
+    if (!w.contains(b.handle)) continue;
+    const BodyParams& p = w.params(b.handle);
+    json j = {{"name", w.name(b.handle)},
+              {"mesh", rebase(b.meshPath, fromDir, toDir)},
+              {"translation", vec(b.translation)},
+              {"rotationDegrees", vec(b.rotationDegrees)},
+              {"scale", b.scale},
+              {"mass", b.totalMass},
+              {"mode", modeName(p.mode)},
+              {"alpha", p.alpha},
+              {"beta", p.beta},
+              {"preserveVolume", p.preserveVolume},
+              {"damping", p.damping},
+              {"contact", b.contact},
+              {"plasticity",
+               {{"yield", p.plasticity.yield},
+                {"creep", p.plasticity.creep},
+                {"max", p.plasticity.max}}}};
+    if (b.render) j["renderMesh"] = rebase(b.render->path, fromDir, toDir);
+    const ClusterDef& c = w.clusterDef(b.handle);
+    json cj = {{"kind", clusterKindName(c.kind)}};
+    if (c.kind == ClusterDef::Kind::Grid) {
+      cj["cellSize"] = c.cellSize;
+      cj["overlap"] = c.overlap;
+    } else if (c.kind == ClusterDef::Kind::Explicit) {
+      cj["clusters"] = c.clusters;
+    }
+    j["clusters"] = cj;
+    bodies.push_back(j);
+  }
+  root["bodies"] = bodies;
+
+  try {
+    writeFileAtomic(path, [&](std::ostream& out) { out << root.dump(2) << "\n"; });
+  } catch (const FileError& e) {
+    throw SceneError(e.what());
+  }
+}
+
+void Scene::renderVertices(int body, PointsRowMajor& out) const {
+  const SceneBody& b = bodies.at(size_t(body));
+  const ConstPointsRef particles = world.positions(b.handle);
+  if (b.render) {
+    b.render->embedding->deform(particles, out);
+  } else {
+    out = particles;
+  }
+}
+
+void Scene::renderVerticesAll(std::vector<PointsRowMajor>& out) const {
+  out.resize(bodies.size());
+  // One body's mesh is too small to split (a few thousand vertices), many bodies are not.
+  parallelFor(static_cast<int>(bodies.size()), 2,
+              [&](int i) { renderVertices(i, out[size_t(i)]); });
+}
+
+const std::vector<std::array<int, 3>>& Scene::renderTriangles(int body) const {
+  const SceneBody& b = bodies.at(size_t(body));
+  return b.render ? b.render->triangles : b.cageTriangles;
+}
+
+std::string defaultScenePath() {
+  return std::string(SOFTBODY_ASSET_DIR) + "/scenes/default.json";
+}
+
+}  // namespace sb

@@ -1,0 +1,76 @@
+// Scene files (JSON) <-> a World plus the render meshes that follow its bodies.
+//
+// A scene file names world settings, static colliders and bodies. Each body's particles are
+// the vertices of a mesh file (normally a coarse closed cage); optionally a detailed render
+// mesh is bound to that cage with mean value coordinates and follows the particles. The format
+// is documented in assets/scenes/README.md.
+#pragma once
+
+#include <array>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "sim/world/world.h"
+
+namespace sb {
+
+namespace cage {
+class Embedding;
+}
+
+// Invalid scene input. what() reads "FILE: FIELD: REASON", e.g.
+// "scenes/x.json: bodies[1].alpha: must be in [0, 1], got 3".
+class SceneError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// A detailed mesh that follows a body's particles (the cage) through a weight matrix.
+struct RenderMesh {
+  std::string path;                                  // as written in the scene file
+  std::vector<std::array<int, 3>> triangles;         // indices into the mesh vertices
+  std::shared_ptr<const cage::Embedding> embedding;  // #mesh vertices × #particles
+};
+
+struct SceneBody {
+  BodyHandle handle;
+  std::string meshPath;  // particles = this mesh's vertices (as written in the file)
+  std::vector<std::array<int, 3>> cageTriangles;  // the particle mesh's faces (may be empty)
+  std::shared_ptr<RenderMesh> render;             // null when the body has no render mesh
+  // The transform and scale applied to the file's vertices, kept so the scene can be saved.
+  Vec3 translation = Vec3::Zero();
+  Vec3 rotationDegrees = Vec3::Zero();  // XYZ Euler angles, degrees
+  double scale = 1.0;
+  double totalMass = 1.0;
+  bool contact = true;  // the cage is the body's surface for body–body contact
+};
+
+struct Scene {
+  std::string path;  // the file it was loaded from, or empty
+  World world;
+  std::vector<SceneBody> bodies;  // in file order; handles refer into world
+
+  // Current render-mesh vertices of body i (#V×3 rows): W · particle positions. Falls back to
+  // the particle positions when the body has no render mesh.
+  void renderVertices(int body, PointsRowMajor& out) const;
+  // The same for every body (out gets one entry per body), bodies deformed in parallel.
+  void renderVerticesAll(std::vector<PointsRowMajor>& out) const;
+  // Triangles to draw for body i: the render mesh's, else the particle mesh's.
+  const std::vector<std::array<int, 3>>& renderTriangles(int body) const;
+};
+
+// Loads a scene. Relative mesh paths are resolved against the scene file's folder. Throws
+// SceneError naming the file, field and reason; nothing is returned half-loaded.
+Scene loadScene(const std::string& path);
+// Parses a scene from JSON text; `name` is used in messages and `baseDir` resolves mesh paths.
+Scene parseScene(const std::string& jsonText, const std::string& name, const std::string& baseDir);
+// Writes the scene with the world's current settings and body parameters. Atomic: writes a
+// temporary file beside the target and renames it. Throws SceneError when it cannot write.
+void saveScene(const Scene& scene, const std::string& path);
+
+// The scene opened when none is given.
+std::string defaultScenePath();
+
+}  // namespace sb

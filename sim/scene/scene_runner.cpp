@@ -1,0 +1,29 @@
+#include "sim/scene/scene_runner.h"
+
+#include <chrono>
+
+namespace sb {
+
+SceneRunner::SceneRunner(Scene& scene, bool deform) : scene_(scene), deform_(deform) {
+  meshes_.resize(scene.bodies.size());
+  for (size_t i = 0; i < scene.bodies.size(); ++i) scene.renderVertices(int(i), meshes_[i]);
+}
+
+void SceneRunner::step(const std::function<void(const WorldEvent&)>& onEvent) {
+  scene_.world.step();
+  totals_.phases += scene_.world.lastProfile();
+  totals_.contacts += scene_.world.lastContactCount();
+  ++totals_.steps;
+  if (deform_) {
+    const auto t0 = std::chrono::steady_clock::now();
+    scene_.renderVerticesAll(meshes_);
+    totals_.deformSeconds +=
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+  for (const WorldEvent& e : scene_.world.takeEvents()) {
+    ++totals_.events;
+    if (onEvent) onEvent(e);
+  }
+}
+
+}  // namespace sb

@@ -1,0 +1,102 @@
+// A body inside the World: its model (what never changes while it runs), its parameters and its
+// state (what every step changes). Internal to sim/world (the public API is world.h).
+//
+// Three lifetimes, three types (as Jolt's shared settings / motion properties / update context,
+// MuJoCo's mjModel / mjData): BodyModel is built once by addBody (again by setClusters) and
+// shared read-only; BodyParams change between steps; BodyState is written by the step's phases,
+// each array documented with the phase that writes it (docs/design.md §3).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "sim/base/csr.h"
+#include "sim/base/types.h"
+#include "sim/mesh/closed_surface.h"
+#include "sim/world/body_def.h"
+#include "sim/world/cluster_state.h"
+#include "sim/world/matching/cluster_batch.h"
+#include "sim/world/matching/cluster_rest.h"
+#include "sim/world/matching/particle_groups.h"
+
+namespace sb {
+
+using MatX3f = Eigen::Matrix<float, Eigen::Dynamic, 3>;
+
+// A fixed range of one cluster's memberships whose moments are summed together (large clusters
+// are split so their sums run in parallel).
+struct MomentTask {
+  int cluster;
+  int begin, end;  // positions in clusterMembers.items (or particle indices: whole-body cluster)
+};
+
+// What never changes while a body runs (rebuilt only by setClusters).
+struct BodyModel {
+  std::string name;
+  Vec3 origin = Vec3::Zero();  // world position of the body frame's origin: rest centre of mass
+  MatX3f rest;                 // r: rest positions in the body frame (#P×3, m)
+  Eigen::VectorXf mass;        // #P, kg
+  double totalMass = 0;        // kg
+  std::vector<int> pinned;     // particle indices held at their start positions
+  MatX3f startPositions, startVelocities;  // #P×3, the state reset() returns to
+  ClusterDef clusterDef;
+  // Clusters in both directions: the members of cluster c (particle indices, ascending) and the
+  // clusters of particle i (ascending).
+  Csr clusterMembers, particleClusters;
+  // Particles with the same clusters (sim/world/matching/particle_groups.h); empty when there is
+  // little to share. Goal sums are formed per group; so are the moments of non-quadratic bodies.
+  ParticleGroups groups;
+  Eigen::VectorXf matchWeight;  // wᵢ = mᵢ / (number of clusters of i): conserves momentum, #P
+  Eigen::VectorXf invCount;     // 1 / (number of clusters of i), #P
+  std::vector<ClusterRestModel> clusterRest;  // #C
+  // Per membership (parallel to clusterMembers.items): q⁰ = r − rc (#M×3, m) and the member's
+  // matching weight (#M, kg).
+  MatX3f memberRest;
+  Eigen::VectorXf memberWeight;
+  std::vector<MomentTask> tasks;  // in cluster order
+  std::vector<int> taskStart;     // tasks of cluster c: taskStart[c] .. taskStart[c+1]
+  bool wholeBodyCluster = false;  // exactly one cluster holding every particle in order
+  // Clusters of at most kBatchMaxMembers members, eight per batch (cluster_batch.h).
+  std::vector<ClusterBatch> batches;
+  // Body–body contact: the closed surface (may be empty) and its adjacency, the surface's mean
+  // edge length at rest (m) and the inverse masses contacts use (1/kg; 0 = pinned, #P).
+  std::vector<mesh::Triangle> surface;
+  mesh::SurfaceTopology surfaceTopology;
+  float spacing = 0;
+  Eigen::VectorXf contactInvMass;
+
+  int clusterCount() const { return static_cast<int>(clusterRest.size()); }
+  int particleCount() const { return static_cast<int>(rest.rows()); }
+};
+
+// Builds the model of a new body from its (validated) definition, with the surface topology
+// built by the validation.
+std::shared_ptr<BodyModel> buildBodyModel(const BodyDef& def, mesh::SurfaceTopology surfaceTopology);
+// The same body with other clusters (everything but the clusters is shared with `base`).
+// Throws std::invalid_argument on a bad cluster definition.
+std::shared_ptr<BodyModel> withClusters(const BodyModel& base, const ClusterDef& clusters);
+
+// What changes every step.
+struct BodyState {
+  MatX3f x;  // positions (m), #P×3: written by Integrate, Contacts, Collide (and drags: v only)
+  MatX3f v;  // velocities (m/s), #P×3: written by External, Integrate, Damping, Contacts, Collide
+  ClusterState clusters;  // per-cluster runtime state: written by Goals (see cluster_state.h)
+};
+
+// Start positions and velocities, identity plastic state, goals = the rest shape.
+void resetBodyState(const BodyModel& model, BodyState& state);
+
+// One entry of the World's body table; handles refer to it by index and generation.
+struct BodySlot {
+  std::uint32_t generation = 0;
+  bool alive = false;
+  std::shared_ptr<const BodyModel> model;
+  BodyParams params;
+  BodyState state;
+};
+
+}  // namespace sb

@@ -1,0 +1,85 @@
+// Definitions from which bodies are created, and the parameters that can be changed while a
+// body runs. Every field has a default that gives a sensible body; units are SI.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "sim/base/types.h"
+
+namespace sb {
+
+// How a cluster's goal positions follow its particles (design.md §5).
+enum class Mode {
+  Rigid,  // goal = R·q + c: the cluster keeps its rest shape exactly
+  Linear,  // goal = (β·A + (1−β)·R)·q + c, A the best affine fit (optionally volume-normalised)
+  Quadratic,  // goal = (β·Ã + (1−β)·[R 0 0])·q̃ + c, allows bending and twisting
+};
+
+const char* modeName(Mode mode);
+// Parses "rigid", "linear" or "quadratic"; returns false for anything else.
+bool parseMode(const std::string& text, Mode* mode);
+
+// How a body's particles are grouped into shape-matching clusters.
+struct ClusterDef {
+  enum class Kind {
+    Single,    // one cluster holding every particle: stiffest
+    Grid,      // a regular grid of cubic cells over the rest shape, each cell plus a margin
+    Explicit,  // user-given particle index lists
+  };
+  Kind kind = Kind::Single;
+  // Grid: edge length of a cell in metres (> 0). Smaller cells = more clusters = floppier.
+  double cellSize = 0.5;
+  // Grid: each cell also takes particles within this distance of it, in metres (≥ 0). Overlap
+  // couples neighbouring clusters; 0 leaves cells disjoint (the body falls apart into pieces).
+  double overlap = 0.25;
+  // Explicit: each inner vector is one cluster's particle indices (0-based, within the body).
+  std::vector<std::vector<int>> clusters;
+};
+
+const char* clusterKindName(ClusterDef::Kind kind);
+
+// Plastic deformation per cluster (design.md §5). Off while yield is infinite or creep is 0.
+struct PlasticityParams {
+  double yield = 0.0;  // c_yield: stretch ‖S − I‖₂ above which the rest shape creeps, ≥ 0
+  double creep = 0.0;  // c_creep in 1/s: rate at which the excess stretch is absorbed, ≥ 0
+  double max = 0.5;    // c_max: bound on the permanent deformation ‖Sᵖ − I‖₂, ≥ 0
+  bool enabled() const { return creep > 0.0; }
+};
+
+// Parameters that may change at any time while the body runs (no rebuild needed).
+struct BodyParams {
+  Mode mode = Mode::Linear;
+  double alpha = 0.5;  // α in [0, 1]: fraction of the way to the goal per step; 1 = rigid-stiff
+  double beta = 0.5;   // β in [0, 1]: 0 = rigid-like goals, 1 = fully linear/quadratic goals
+  // Linear mode: divide A by ∛det(A) so the goal keeps the rest volume.
+  bool preserveVolume = true;
+  // Damping in [0, 1] per step of the velocity relative to the body's rigid motion (linear and
+  // angular velocity fitted to all particles); rigid motion itself is never damped.
+  double damping = 0.0;
+  PlasticityParams plasticity;
+};
+
+// Everything needed to create a body. Positions are given in world space.
+struct BodyDef {
+  std::string name = "body";
+  // Particle rest positions in metres (#P, P ≥ 1); the particles start here.
+  std::vector<Vec3> positions;
+  // Per-particle masses in kg (> 0), or empty to split totalMass evenly.
+  std::vector<double> masses;
+  double totalMass = 1.0;        // kg, > 0; used when masses is empty
+  Vec3 velocity = Vec3::Zero();  // initial velocity of every particle, m/s
+  // Particles held in place (indices within the body). They keep their start position and take
+  // part in shape matching with their ordinary mass, so they never become infinite weights.
+  std::vector<int> pinned;
+  // The body's closed surface for body–body contact: triangles of particle indices,
+  // counter-clockwise seen from outside (normally the cage's faces). It must be a closed,
+  // 2-manifold, outward-oriented surface (checked). Empty: other bodies pass through this one,
+  // while its own particles are still kept out of the other bodies' surfaces.
+  std::vector<std::array<int, 3>> surface;
+  ClusterDef clusters;
+  BodyParams params;
+};
+
+}  // namespace sb

@@ -1,0 +1,124 @@
+#include "sim/world/body.h"
+
+#include <algorithm>
+
+#include "sim/world/matching/cluster_layout.h"
+
+namespace sb {
+
+namespace {
+
+constexpr int kMembersPerTask = 8192;  // cluster members per moment task
+
+// Everything that depends on the clusters: membership both ways, particle groups, matching
+// weights, rest models, moment tasks, member rest offsets and batches.
+void buildClusters(BodyModel& m, const ClusterDef& clusters) {
+  m.clusterDef = clusters;
+  std::vector<Vec3> restWorld(static_cast<size_t>(m.particleCount()));
+  for (int i = 0; i < m.particleCount(); ++i)
+    restWorld[size_t(i)] = m.rest.row(i).transpose().cast<double>() + m.origin;
+  const std::vector<std::vector<int>> lists = buildClusterMembers(clusters, restWorld);
+
+  const int n = m.particleCount();
+  const int nc = static_cast<int>(lists.size());
+  buildCsr(
+      nc,
+      [&](const auto& emit) {
+        for (int c = 0; c < nc; ++c)
+          for (int p : lists[size_t(c)]) emit(c, p);
+      },
+      m.clusterMembers);
+  buildCsr(
+      n,
+      [&](const auto& emit) {
+        for (int c = 0; c < nc; ++c)
+          for (int p : lists[size_t(c)]) emit(p, c);
+      },
+      m.particleClusters);
+  m.matchWeight.resize(n);
+  m.invCount.resize(n);
+  for (int i = 0; i < n; ++i) {
+    m.invCount[i] = 1.0f / float(m.particleClusters.size(i));
+    m.matchWeight[i] = m.mass[i] * m.invCount[i];
+  }
+  const float* restCols[3] = {m.rest.col(0).data(), m.rest.col(1).data(), m.rest.col(2).data()};
+  m.groups = buildParticleGroups(n, m.particleClusters, nc, restCols, m.matchWeight.data());
+  m.wholeBodyCluster = nc == 1 && int(m.clusterMembers.items.size()) == n;
+  m.clusterRest.resize(size_t(nc));
+  m.tasks.clear();
+  m.taskStart.assign(1, 0);
+  for (int c = 0; c < nc; ++c) {
+    const int b = m.clusterMembers.start[size_t(c)], e = m.clusterMembers.start[size_t(c) + 1];
+    m.clusterRest[size_t(c)] =
+        buildClusterRest(m.clusterMembers.items.data() + b, e - b, m.rest.col(0).data(),
+                         m.rest.col(1).data(), m.rest.col(2).data(), m.matchWeight.data());
+    for (int k = b; k < e; k += kMembersPerTask)
+      m.tasks.push_back({c, k, std::min(e, k + kMembersPerTask)});
+    m.taskStart.push_back(static_cast<int>(m.tasks.size()));
+  }
+  const int memberCount = static_cast<int>(m.clusterMembers.items.size());
+  m.memberRest.resize(memberCount, 3);
+  m.memberWeight.resize(memberCount);
+  for (int c = 0; c < nc; ++c) {
+    const Eigen::Vector3f rc = m.clusterRest[size_t(c)].centre;
+    for (int k = m.clusterMembers.start[size_t(c)]; k < m.clusterMembers.start[size_t(c) + 1];
+         ++k) {
+      const int i = m.clusterMembers.items[size_t(k)];
+      for (int a = 0; a < 3; ++a) m.memberRest(k, a) = m.rest(i, a) - rc[a];  // as the kernels do
+      m.memberWeight[k] = m.matchWeight[i];
+    }
+  }
+  const float* memberRest[3] = {m.memberRest.col(0).data(), m.memberRest.col(1).data(),
+                                m.memberRest.col(2).data()};
+  m.batches = buildClusterBatches(m.clusterMembers, memberRest, m.memberWeight.data(),
+                                  m.clusterRest);
+}
+
+}  // namespace
+
+std::shared_ptr<BodyModel> buildBodyModel(const BodyDef& def,
+                                          mesh::SurfaceTopology surfaceTopology) {
+  auto m = std::make_shared<BodyModel>();
+  const int n = static_cast<int>(def.positions.size());
+  m->name = def.name;
+  m->mass.resize(n);
+  for (int i = 0; i < n; ++i)
+    m->mass[i] = def.masses.empty() ? float(def.totalMass / n) : float(def.masses[size_t(i)]);
+  m->totalMass = 0;
+  Vec3 weighted = Vec3::Zero();
+  for (int i = 0; i < n; ++i) {
+    m->totalMass += m->mass[i];
+    weighted += double(m->mass[i]) * def.positions[size_t(i)];
+  }
+  m->origin = weighted / m->totalMass;
+  m->rest.resize(n, 3);
+  m->startPositions.resize(n, 3);
+  m->startVelocities.resize(n, 3);
+  for (int i = 0; i < n; ++i) {
+    m->rest.row(i) = (def.positions[size_t(i)] - m->origin).transpose().cast<float>();
+    m->startPositions.row(i) = def.positions[size_t(i)].transpose().cast<float>();
+    m->startVelocities.row(i) = def.velocity.transpose().cast<float>();
+  }
+  m->pinned = def.pinned;
+  m->surface = def.surface;
+  m->surfaceTopology = std::move(surfaceTopology);
+  m->spacing = float(mesh::meanEdgeLength(m->surface, def.positions));
+  m->contactInvMass = m->mass.cwiseInverse();
+  for (int p : m->pinned) m->contactInvMass[p] = 0.0f;
+  buildClusters(*m, def.clusters);
+  return m;
+}
+
+std::shared_ptr<BodyModel> withClusters(const BodyModel& base, const ClusterDef& clusters) {
+  auto m = std::make_shared<BodyModel>(base);
+  buildClusters(*m, clusters);
+  return m;
+}
+
+void resetBodyState(const BodyModel& model, BodyState& state) {
+  state.x = model.startPositions;
+  state.v = model.startVelocities;
+  state.clusters.reset(model, state.x);
+}
+
+}  // namespace sb

@@ -1,0 +1,103 @@
+#include "sim/world/collider.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace sb {
+
+Collider Collider::plane(const Vec3& normal, double offset, double friction) {
+  Collider c;
+  c.shape = Shape::Plane;
+  c.normal = normal.normalized();
+  c.offset = offset;
+  c.friction = friction;
+  return c;
+}
+
+Collider Collider::box(const Vec3& centre, const Vec3& halfExtents, const Mat3& rotation,
+                       double friction) {
+  Collider c;
+  c.shape = Shape::Box;
+  c.centre = centre;
+  c.halfExtents = halfExtents;
+  c.rotation = rotation;
+  c.friction = friction;
+  return c;
+}
+
+Collider Collider::sphere(const Vec3& centre, double radius, double friction) {
+  Collider c;
+  c.shape = Shape::Sphere;
+  c.centre = centre;
+  c.radius = radius;
+  c.friction = friction;
+  return c;
+}
+
+Collider Collider::capsule(const Vec3& a, const Vec3& b, double radius, double friction) {
+  Collider c;
+  c.shape = Shape::Capsule;
+  c.centre = 0.5 * (a + b);
+  c.axis = 0.5 * (b - a);
+  c.radius = radius;
+  c.friction = friction;
+  return c;
+}
+
+const char* colliderShapeName(Collider::Shape shape) {
+  switch (shape) {
+    case Collider::Shape::Plane:
+      return "plane";
+    case Collider::Shape::Box:
+      return "box";
+    case Collider::Shape::Sphere:
+      return "sphere";
+    case Collider::Shape::Capsule:
+      return "capsule";
+  }
+  return "?";
+}
+
+double colliderDistance(const Collider& c, const Vec3& p, Vec3* normal) {
+  switch (c.shape) {
+    case Collider::Shape::Plane:
+      *normal = c.normal;
+      return c.normal.dot(p) - c.offset;
+    case Collider::Shape::Sphere: {
+      const Vec3 d = p - c.centre;
+      const double len = d.norm();
+      *normal = len > 0.0 ? Vec3(d / len) : Vec3::UnitY();
+      return len - c.radius;
+    }
+    case Collider::Shape::Capsule: {
+      const double axisLen2 = c.axis.squaredNorm();
+      const double s =
+          axisLen2 > 0.0 ? std::clamp((p - c.centre).dot(c.axis) / axisLen2, -1.0, 1.0) : 0.0;
+      const Vec3 d = p - (c.centre + s * c.axis);
+      const double len = d.norm();
+      *normal = len > 0.0 ? Vec3(d / len) : Vec3::UnitY();
+      return len - c.radius;
+    }
+    case Collider::Shape::Box: {
+      const Vec3 local = c.rotation.transpose() * (p - c.centre);
+      const Vec3 q = local.cwiseAbs() - c.halfExtents;
+      if ((q.array() > 0.0).any()) {  // outside: distance to the closest point of the box
+        const Vec3 outside = q.cwiseMax(0.0);
+        Vec3 n = outside.cwiseProduct(local.cwiseSign());
+        const double len = n.norm();
+        *normal = c.rotation * (n / len);
+        return len;
+      }
+      int axis = 0;  // inside: leave through the nearest face
+      q.maxCoeff(&axis);
+      Vec3 n = Vec3::Zero();
+      n[axis] = local[axis] >= 0.0 ? 1.0 : -1.0;
+      *normal = c.rotation * n;
+      return q[axis];
+    }
+  }
+  *normal = Vec3::UnitY();
+  return 1.0;
+}
+
+}  // namespace sb

@@ -1,0 +1,40 @@
+// Static colliders that particles cannot enter, with Coulomb-style friction.
+#pragma once
+
+#include <string>
+
+#include "sim/base/types.h"
+
+namespace sb {
+
+struct Collider {
+  enum class Shape { Plane, Box, Sphere, Capsule };
+  Shape shape = Shape::Plane;
+  // Plane: points x with normal·x < offset are inside (the solid half-space).
+  Vec3 normal = Vec3::UnitY();  // unit length
+  double offset = 0.0;          // metres
+  // Box: centre, half extents (metres, > 0) and orientation (rotation matrix, box → world).
+  // Sphere: centre and radius. Capsule: segment from centre−axis to centre+axis, radius.
+  Vec3 centre = Vec3::Zero();
+  Vec3 halfExtents = Vec3::Constant(0.5);
+  Mat3 rotation = Mat3::Identity();
+  double radius = 0.5;
+  Vec3 axis = Vec3(0.0, 0.5, 0.0);
+  // Friction coefficient μ ≥ 0: tangential speed lost per contact, relative to the normal
+  // speed removed; a large μ makes contact sticky.
+  double friction = 0.5;
+
+  static Collider plane(const Vec3& normal, double offset, double friction = 0.5);
+  static Collider box(const Vec3& centre, const Vec3& halfExtents, const Mat3& rotation,
+                      double friction = 0.5);
+  static Collider sphere(const Vec3& centre, double radius, double friction = 0.5);
+  static Collider capsule(const Vec3& a, const Vec3& b, double radius, double friction = 0.5);
+};
+
+const char* colliderShapeName(Collider::Shape shape);
+
+// Signed distance from p to the collider surface (negative inside) and the outward surface
+// normal at the closest point. Pure function; used by the Collide phase and the tests.
+double colliderDistance(const Collider& collider, const Vec3& p, Vec3* normal);
+
+}  // namespace sb

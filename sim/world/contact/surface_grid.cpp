@@ -1,0 +1,72 @@
+#include "sim/world/contact/surface_grid.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace sb {
+
+void SurfaceGrid::build(const std::vector<mesh::Triangle>& triangles, const float* x, const float* y,
+                        const float* z, float reach, float cellSize,
+                        const Eigen::AlignedBox3f& region) {
+  reach_ = reach;
+  bounds_.setEmpty();
+  for (const mesh::Triangle& t : triangles)
+    for (int i : t) bounds_.extend(Vec3f(x[i], y[i], z[i]));
+  bounds_.min().array() -= reach;
+  bounds_.max().array() += reach;
+  bounds_ = bounds_.intersection(region);
+  if (bounds_.isEmpty()) {  // no particle can ask: an empty grid
+    dims_.setZero();
+    cells_.start.assign(1, 0);
+    cells_.items.clear();
+    return;
+  }
+  const Vec3f extent = bounds_.sizes();
+  float cell = std::max(cellSize, extent.maxCoeff() / float(maxCellsPerAxis));
+  if (!(cell > 0.0f) || !std::isfinite(cell)) cell = 1.0f;  // empty or point-like surface
+  invCell_ = 1.0f / cell;
+  origin_ = bounds_.min();
+  for (int a = 0; a < 3; ++a)
+    dims_[a] = std::clamp(int(std::ceil(extent[a] * invCell_)), 1, maxCellsPerAxis);
+
+  cellBoxes_.resize(triangles.size());
+  triangleBoxes_.resize(triangles.size());
+  for (size_t t = 0; t < triangles.size(); ++t) {
+    Eigen::AlignedBox3f box;
+    for (int i : triangles[t]) box.extend(Vec3f(x[i], y[i], z[i]));
+    triangleBoxes_[t] = box;
+    box.min().array() -= reach;
+    box.max().array() += reach;
+    cellBoxes_[t] = box.intersects(bounds_) ? Eigen::AlignedBox3i(cellOf(box.min()), cellOf(box.max()))
+                                            : Eigen::AlignedBox3i();  // empty: entered nowhere
+  }
+  buildCsr(
+      dims_.prod(),
+      [&](const auto& emit) {
+        for (size_t t = 0; t < triangles.size(); ++t) {
+          const Eigen::AlignedBox3i& cells = cellBoxes_[t];
+          if (cells.isEmpty()) continue;
+          for (int k = cells.min().z(); k <= cells.max().z(); ++k)
+            for (int j = cells.min().y(); j <= cells.max().y(); ++j)
+              for (int i = cells.min().x(); i <= cells.max().x(); ++i)
+                emit(cellIndex(i, j, k), int(t));
+        }
+      },
+      cells_);
+}
+
+Eigen::Vector3i SurfaceGrid::cellOf(const Vec3f& p) const {
+  Eigen::Vector3i c;
+  for (int a = 0; a < 3; ++a)
+    c[a] = std::clamp(int(std::floor((p[a] - origin_[a]) * invCell_)), 0, dims_[a] - 1);
+  return c;
+}
+
+SurfaceGrid::Range SurfaceGrid::candidates(const Vec3f& p) const {
+  if (!bounds_.contains(p)) return {nullptr, nullptr};
+  const Eigen::Vector3i c = cellOf(p);
+  const int k = cellIndex(c[0], c[1], c[2]);
+  return {cells_.begin(k), cells_.end(k)};
+}
+
+}  // namespace sb

@@ -1,0 +1,84 @@
+// A uniform grid over one body's surface triangles: finds every triangle within a given reach
+// of a point by looking at one cell. Built from the surface's positions at one moment; the
+// Contacts phase keeps it while the surface drifts less than a quarter spacing from there.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <vector>
+
+#include "sim/base/csr.h"
+#include "sim/base/types.h"
+#include "sim/mesh/closed_surface.h"
+
+namespace sb {
+
+class SurfaceGrid {
+ public:
+  // Each triangle is entered in every cell its bounding box, grown by `reach` (metres, ≥ 0),
+  // overlaps, so candidates(p) holds every triangle within `reach` of p for every p inside
+  // `region` (only that part of space is gridded: where the particles that will ask are). Cells
+  // are cubes of about `cellSize` metres (> 0), made larger when the grid would exceed
+  // maxCellsPerAxis. Points are #P×3 columns x, y, z.
+  void build(const std::vector<mesh::Triangle>& triangles, const float* x, const float* y, const float* z,
+             float reach, float cellSize, const Eigen::AlignedBox3f& region);
+
+  // The bounding box of all triangles grown by the reach, clipped to the region: outside it no
+  // triangle is in reach (or the point is outside the region).
+  const Eigen::AlignedBox3f& bounds() const { return bounds_; }
+  float reach() const { return reach_; }
+
+  // Triangle indices entered in p's cell, ascending; empty when p is outside bounds().
+  struct Range {
+    const int* begin;
+    const int* end;
+  };
+  Range candidates(const Vec3f& p) const;
+
+  // Calls visit(range) for every cell that overlaps the box p ± extra (extra ≥ 0, metres): together
+  // they hold every triangle within reach() + extra of p (a triangle may come up more than once).
+  template <typename Visit>
+  void forEachCell(const Vec3f& p, float extra, const Visit& visit) const;
+
+  // Squared distance (m²) from p to the bounding box of triangle t at build time: a lower
+  // bound on its distance to the triangle, to skip triangles without the exact test.
+  float boxDistanceSquared(int t, const Vec3f& p) const {
+    const Eigen::AlignedBox3f& b = triangleBoxes_[size_t(t)];
+    const Vec3f below = (b.min() - p).cwiseMax(0.0f), above = (p - b.max()).cwiseMax(0.0f);
+    return (below + above).squaredNorm();
+  }
+
+  static constexpr int maxCellsPerAxis = 48;
+
+ private:
+  Eigen::AlignedBox3f bounds_;
+  float reach_ = 0;
+  Vec3f origin_ = Vec3f::Zero();
+  float invCell_ = 1.0f;
+  Eigen::Vector3i dims_ = Eigen::Vector3i::Zero();
+  Csr cells_;  // the triangles entered in each cell, ascending
+  std::vector<Eigen::AlignedBox3f> triangleBoxes_;  // per triangle, not grown
+  // Scratch kept between builds so a rebuild does not allocate: each triangle's cell range.
+  std::vector<Eigen::AlignedBox3i> cellBoxes_;
+  int cellIndex(int i, int j, int k) const { return (k * dims_.y() + j) * dims_.x() + i; }
+  Eigen::Vector3i cellOf(const Vec3f& p) const;
+};
+
+template <typename Visit>
+void SurfaceGrid::forEachCell(const Vec3f& p, float extra, const Visit& visit) const {
+  if (extra <= 0.0f) {
+    const Range r = candidates(p);
+    if (r.begin != r.end) visit(r);
+    return;
+  }
+  const Eigen::AlignedBox3f box(p.array() - extra, p.array() + extra);
+  if (!box.intersects(bounds_)) return;
+  const Eigen::Vector3i lo = cellOf(box.min()), hi = cellOf(box.max());
+  for (int k = lo.z(); k <= hi.z(); ++k)
+    for (int j = lo.y(); j <= hi.y(); ++j)
+      for (int i = lo.x(); i <= hi.x(); ++i) {
+        const int c = cellIndex(i, j, k);
+        if (cells_.size(c) != 0) visit(Range{cells_.begin(c), cells_.end(c)});
+      }
+}
+
+}  // namespace sb

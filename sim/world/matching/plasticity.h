@@ -1,0 +1,21 @@
+// Plastic flow of a cluster's rest shape (design.md §5, Müller et al. 2005 §4.4).
+#pragma once
+
+#include "sim/world/body_def.h"
+#include "sim/base/types.h"
+
+namespace sb {
+
+// Spectral norm ‖M‖₂ (largest singular value).
+double spectralNorm(const Mat3& M);
+
+// One plastic update over a step of h seconds, given the cluster's current stretch S (symmetric,
+// from A = R·S relative to the current rest shape):
+//   if ‖S − I‖₂ > c_yield:  Sᵖ ← (I + h·c_creep·(S − I))·Sᵖ, then Sᵖ ← Sᵖ / ∛det Sᵖ
+//   if ‖Sᵖ − I‖₂ > c_max:   Sᵖ ← I + c_max·(Sᵖ − I)/‖Sᵖ − I‖₂, renormalised
+// Keeps det Sᵖ = 1 and ‖Sᵖ − I‖₂ ≤ c_max. Returns true when Sᵖ changed. A stretch that is not
+// finite or would make det ≤ 0 leaves Sᵖ unchanged.
+bool updatePlasticDeformation(const Mat3& stretch, double h, const PlasticityParams& params,
+                              Mat3& plastic);
+
+}  // namespace sb

@@ -1,0 +1,50 @@
+// Every accepted range of a parameter, in one place: the World checks its inputs against these,
+// the scene parser checks scene fields against them and the command line checks its options, so
+// the three can never disagree. Units as in body_def.h / world.h.
+#pragma once
+
+#include <string>
+
+namespace sb {
+
+// The closed interval [lo, hi], or (lo, hi] when loOpen.
+struct ParamRange {
+  double lo, hi;
+  bool loOpen = false;
+  bool contains(double v) const { return (loOpen ? v > lo : v >= lo) && v <= hi; }
+};
+
+// "must be in [lo, hi], got V" when v is outside (NaN included), else "".
+std::string rangeViolation(const ParamRange& range, double v);
+// The range as text: "[0, 1]" or "(0, 10]".
+std::string describe(const ParamRange& range);
+// A number as the messages print it (%g).
+std::string formatNumber(double v);
+
+namespace limits {
+// World settings.
+inline constexpr ParamRange timeStep{1e-7, 10.0};    // s, per step() (and per dt of step(dt))
+inline constexpr ParamRange substeps{1, 1000};       // sub-steps per step()
+inline constexpr ParamRange gravityNorm{0.0, 1e4};   // m/s², length of the gravity vector
+inline constexpr ParamRange friction{0.0, 1000.0};   // μ, colliders and body–body contact
+// Body parameters.
+inline constexpr ParamRange alpha{0.0, 1.0};
+inline constexpr ParamRange beta{0.0, 1.0};
+inline constexpr ParamRange damping{0.0, 1.0};
+inline constexpr ParamRange plasticYield{0.0, 1e6};
+inline constexpr ParamRange plasticCreep{0.0, 1e6};  // 1/s
+inline constexpr ParamRange plasticMax{0.0, 1e6};
+inline constexpr ParamRange bodyMass{1e-9, 1e9};      // kg, a body's total mass
+inline constexpr ParamRange particleMass{1e-12, 1e9};  // kg, one particle's mass
+inline constexpr ParamRange cellSize{1e-6, 1e6};       // m, grid clusters
+inline constexpr ParamRange overlap{0.0, 1e6};         // m, grid clusters
+inline constexpr ParamRange dragStiffness{0.0, 1.0};   // fraction of the gap per step
+// Placement (scene files): coordinates, speeds, angles, scale, collider sizes.
+inline constexpr double coordinateLimit = 1e6;  // m, |component| of positions and offsets
+inline constexpr double speedLimit = 1e4;       // m/s, |component| of initial velocities
+inline constexpr double angleLimit = 1e4;       // degrees, |component| of Euler angles
+inline constexpr ParamRange scale{1e-9, 1e9};   // uniform scale of a body's mesh
+inline constexpr ParamRange radius{1e-9, 1e6};  // m, sphere and capsule colliders
+}  // namespace limits
+
+}  // namespace sb

@@ -1,0 +1,27 @@
+#include "sim/world/step_phases.h"
+
+namespace sb {
+
+const char* phaseName(Phase phase) {
+  switch (phase) {
+    case Phase::External:
+      return "external";
+    case Phase::Goals:
+      return "goals";
+    case Phase::Plasticity:
+      return "plasticity";
+    case Phase::Integrate:
+      return "integrate";
+    case Phase::Damping:
+      return "damping";
+    case Phase::Contacts:
+      return "contacts";
+    case Phase::Collide:
+      return "collide";
+    case Phase::Check:
+      return "check";
+  }
+  return "?";
+}
+
+}  // namespace sb

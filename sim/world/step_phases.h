@@ -1,0 +1,50 @@
+// The phases of one World sub-step, in the order they run, and the time spent in each.
+//
+// Every consumer (the run command, the viewer's panel and stats, the benchmarks) loops over
+// kPhases and prints phaseName(): adding a phase here is the only change they need.
+// What each phase reads and writes: docs/design.md §3.
+#pragma once
+
+#include <array>
+#include <cstddef>
+
+namespace sb {
+
+enum class Phase : int {
+  External,    // drags and queued forces change velocities
+  Goals,       // per cluster: centre of mass, moments, rotation, goal transform
+  Plasticity,  // per cluster: plastic flow of the rest shape (measured inside Goals)
+  Integrate,   // per particle: blend the cluster goals, Müller's update of v and x
+  Damping,     // velocities relative to each body's rigid motion damped
+  Contacts,    // body–body contact: bounds, grids, detection, response
+  Collide,     // static colliders
+  Check,       // NaN/Inf detection and reset
+};
+
+inline constexpr int kPhaseCount = 8;
+inline constexpr std::array<Phase, kPhaseCount> kPhases = {
+    Phase::External, Phase::Goals,    Phase::Plasticity, Phase::Integrate,
+    Phase::Damping,  Phase::Contacts, Phase::Collide,    Phase::Check,
+};
+
+// Lower-case name ("goals"), used as label and as key in files.
+const char* phaseName(Phase phase);
+
+// Wall-clock seconds spent in each phase, accumulated over the sub-steps of World::step.
+struct StepProfile {
+  std::array<double, kPhaseCount> seconds{};
+
+  double& operator[](Phase p) { return seconds[std::size_t(p)]; }
+  double operator[](Phase p) const { return seconds[std::size_t(p)]; }
+  double total() const {
+    double sum = 0;
+    for (double s : seconds) sum += s;
+    return sum;
+  }
+  StepProfile& operator+=(const StepProfile& o) {
+    for (int i = 0; i < kPhaseCount; ++i) seconds[std::size_t(i)] += o.seconds[std::size_t(i)];
+    return *this;
+  }
+};
+
+}  // namespace sb

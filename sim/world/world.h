@@ -1,0 +1,149 @@
+// The World owns every particle, body, cluster and collider and advances them in time.
+//
+// One step runs the phases of step_phases.h in a fixed order, each in its own file with what it
+// reads and writes (docs/design.md §3):
+//   External    drag constraints and queued forces change velocities      (external_phase.h)
+//   Goals       per cluster: centre of mass, moments, rotation, goal;      (goals_phase.h)
+//   Plasticity  plastic flow of the rest shape (plastic bodies only)
+//   Integrate   per particle: blend its clusters' goals, v += α(g − x)/h + h·gravity,
+//               x += h·v  (Müller et al. 2005: stable for every h when α ≤ 1)   (integrate_phase.h)
+//   Damping     damp velocity relative to each body's rigid motion
+//   Contacts    particles pushed out of other bodies' surfaces, friction  (contact_phase.h)
+//   Collide     the same against the static colliders
+//   Check       bodies with NaN/Inf are reset to their start and reported as events
+// Results depend only on the input and never on the thread count: every sum is formed in a
+// fixed order over fixed-size blocks. Accepted parameter ranges: param_ranges.h.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "sim/world/body_def.h"
+#include "sim/world/collider.h"
+#include "sim/world/step_phases.h"
+#include "sim/base/types.h"
+
+namespace sb {
+
+struct WorldSettings {
+  Vec3 gravity = Vec3(0.0, -9.81, 0.0);  // m/s²
+  double timeStep = 1.0 / 60.0;          // seconds advanced by step(), [1e-7, 10]
+  int substeps = 1;                      // sub-steps per step(), 1 … 1000
+  bool bodyContact = true;               // bodies with a surface keep other bodies out
+  double contactFriction = 0.5;          // μ in [0, 1000] between bodies (as Collider::friction)
+};
+
+// Refers to a body; stays valid until the body is removed (then contains() is false).
+struct BodyHandle {
+  std::uint32_t index = UINT32_MAX;
+  std::uint32_t generation = 0;
+  bool operator==(const BodyHandle& o) const {
+    return index == o.index && generation == o.generation;
+  }
+  bool operator!=(const BodyHandle& o) const { return !(*this == o); }
+};
+
+// A soft constraint that pulls a point of a body toward a target (mouse dragging). The point is
+// Σ wⱼ xⱼ over the listed particles; each step every listed particle j is pulled by
+// stiffness · wⱼ·Δ / Σₖwₖ² with Δ = target − point (the minimum-norm move of the particles that
+// brings the point onto the target, design.md §6), so shape matching keeps acting.
+struct DragDef {
+  BodyHandle body;
+  std::vector<int> particles;   // indices within the body
+  std::vector<double> weights;  // same length; e.g. a surface point's cage weights
+  Vec3 target = Vec3::Zero();   // metres
+  double stiffness = 0.2;       // fraction of the gap closed per step, in (0, 1]
+};
+
+// Something the user should be told about (a body that went NaN and was reset, ...).
+struct WorldEvent {
+  BodyHandle body;
+  std::string message;
+};
+
+class World {
+ public:
+  explicit World(const WorldSettings& settings = {});
+  ~World();
+  World(World&&) noexcept;
+  World& operator=(World&&) noexcept;
+  World(const World&);
+  World& operator=(const World&);
+
+  // ---- world ----
+  const WorldSettings& settings() const;
+  // Throws std::invalid_argument naming the field when a value is out of range.
+  void setSettings(const WorldSettings& settings);
+  void addCollider(const Collider& collider);  // throws std::invalid_argument on bad shapes
+  void clearColliders();
+  const std::vector<Collider>& colliders() const;
+
+  // ---- bodies ----
+  // Validates the definition (throws std::invalid_argument naming the field and reason; the
+  // world is unchanged then) and creates the body at its start state.
+  BodyHandle addBody(const BodyDef& def);
+  void removeBody(BodyHandle body);
+  bool contains(BodyHandle body) const;
+  std::vector<BodyHandle> bodies() const;  // in creation order
+  const std::string& name(BodyHandle body) const;
+  const BodyParams& params(BodyHandle body) const;
+  void setParams(BodyHandle body, const BodyParams& params);  // throws on bad values
+  const ClusterDef& clusterDef(BodyHandle body) const;
+  // Rebuilds the body's clusters from its rest shape (throws on bad values; body unchanged then).
+  // Plastic deformation is cleared; positions and velocities are kept.
+  void setClusters(BodyHandle body, const ClusterDef& clusters);
+  int clusterCount(BodyHandle body) const;
+  // Particle indices (within the body) of each cluster.
+  std::vector<std::vector<int>> clusterMembers(BodyHandle body) const;
+
+  // ---- per-body particle data (#P×3, metres or m/s; rows in the order of BodyDef::positions) --
+  int particleCount(BodyHandle body) const;
+  ConstPointsRef positions(BodyHandle body) const;
+  ConstPointsRef velocities(BodyHandle body) const;
+  ConstPointsRef restPositions(BodyHandle body) const;
+  Eigen::VectorXf masses(BodyHandle body) const;  // kg per particle (#P)
+  double mass(BodyHandle body) const;             // kg
+  Vec3 centreOfMass(BodyHandle body) const;
+  Vec3 linearMomentum(BodyHandle body) const;
+  Vec3 angularMomentum(BodyHandle body, const Vec3& about = Vec3::Zero()) const;
+  // Overwrites positions and velocities (#P×3 each); for tests, tools and scripted starts.
+  void setState(BodyHandle body, const Eigen::MatrixX3d& positions,
+                const Eigen::MatrixX3d& velocities);
+  // Goal positions of the last step, blended per particle (#P×3); the rest shape before the
+  // first step.
+  Eigen::MatrixX3d goals(BodyHandle body) const;
+  // Permanent deformation Sᵖ of one cluster (identity without plasticity).
+  Mat3 plasticDeformation(BodyHandle body, int cluster) const;
+
+  // ---- interaction ----
+  // Adds a force (newtons) on one particle for the next step only.
+  void addForce(BodyHandle body, int particle, const Vec3& force);
+  int addDrag(const DragDef& drag);  // returns an id; throws on bad indices/weights
+  void setDragTarget(int id, const Vec3& target);
+  void setDragStiffness(int id, double stiffness);
+  void removeDrag(int id);
+
+  // ---- time ----
+  void step();           // advance by settings().timeStep in settings().substeps sub-steps
+  void step(double dt);  // advance by dt seconds ([1e-7, 10]) in settings().substeps sub-steps
+  void reset();          // every body back to its start state; plasticity and drags cleared
+  double time() const;   // seconds simulated since creation or reset
+  const StepProfile& lastProfile() const;  // phases of the last step() call
+  int lastContactCount() const;            // body–body contacts resolved in the last sub-step
+  std::vector<WorldEvent> takeEvents();    // returns and clears pending events
+
+  // Hash of the physical state (positions, velocities, plastic deformation), bit-exact. The
+  // solver's caches — warm-start rotations and reference points of the cluster fits — are left
+  // out: they are held in float lanes or in double per cluster depending on the solver path
+  // (cluster_state.h), so hashing them would make equal physical states hash differently.
+  // They do steer later steps, so replays compare hashes after the same number of steps.
+  std::uint64_t stateHash() const;
+
+ private:
+  struct Data;
+  std::unique_ptr<Data> d_;
+};
+
+}  // namespace sb
