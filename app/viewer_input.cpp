@@ -1,4 +1,4 @@
-// Mouse and keyboard: orbit camera, dragging bodies (design.md §7), keyboard shortcuts.
+// Mouse and keyboard: orbit camera, dragging bodies (docs/design.md §5.4), keyboard shortcuts.
 //
 //   left drag          grab the surface point under the cursor and pull it (soft constraint)
 //   Ctrl + left drag   grab the nearest particle instead

@@ -10,7 +10,7 @@
 
 namespace sb {
 
-// How a cluster's goal positions follow its particles (design.md §5).
+// How a cluster's goal positions follow its particles (docs/design.md §5.1).
 enum class Mode {
   Rigid,  // goal = R·q + c: the cluster keeps its rest shape exactly
   Linear,  // goal = (β·A + (1−β)·R)·q + c, A the best affine fit (optionally volume-normalised)
@@ -40,7 +40,7 @@ struct ClusterDef {
 
 const char* clusterKindName(ClusterDef::Kind kind);
 
-// Plastic deformation per cluster (design.md §5). Off while yield is infinite or creep is 0.
+// Plastic deformation per cluster (docs/design.md §5.2). Off while yield is infinite or creep is 0.
 struct PlasticityParams {
   double yield = 0.0;  // c_yield: stretch ‖S − I‖₂ above which the rest shape creeps, ≥ 0
   double creep = 0.0;  // c_creep in 1/s: rate at which the excess stretch is absorbed, ≥ 0

@@ -20,7 +20,7 @@ void runExternalPhase(const std::vector<QueuedForce>& forces, const std::map<int
       sumW2 += drag.weights[k] * drag.weights[k];
     }
     // Give the dragged point the velocity that closes `stiffness` of the gap over this sub-step,
-    // by the minimum-norm change of the particles' velocities (docs/design.md §5). Replacing the
+    // by the minimum-norm change of the particles' velocities (docs/design.md §5.4). Replacing the
     // point's velocity, rather than adding to it, keeps the pull from oscillating.
     const Vec3 wanted = (drag.stiffness / h) * (drag.target - point);
     const Vec3 change = (wanted - pointVelocity) / sumW2;

@@ -48,7 +48,7 @@ struct BodyHandle {
 // A soft constraint that pulls a point of a body toward a target (mouse dragging). The point is
 // Σ wⱼ xⱼ over the listed particles; each step every listed particle j is pulled by
 // stiffness · wⱼ·Δ / Σₖwₖ² with Δ = target − point (the minimum-norm move of the particles that
-// brings the point onto the target, design.md §6), so shape matching keeps acting.
+// brings the point onto the target, docs/design.md §5.4), so shape matching keeps acting.
 struct DragDef {
   BodyHandle body;
   std::vector<int> particles;   // indices within the body

@@ -1,4 +1,4 @@
-// Shape matching of many small clusters at once (design.md §5; rigid and linear modes).
+// Shape matching of many small clusters at once (docs/design.md §5.6; rigid and linear modes).
 //
 // A tetrahedral split of a body gives thousands of clusters of four particles. Per cluster the
 // general path (shape_matching.h + rotation.h) spends ~400 ns, most of it in double-precision

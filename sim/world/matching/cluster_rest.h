@@ -1,6 +1,6 @@
 // Per-cluster rest data: what shape matching needs to know about a cluster's rest shape.
 //
-// Notation (design.md §5): rᵢ is a particle's rest position in its body's frame, rc the
+// Notation (docs/design.md §5.1): rᵢ is a particle's rest position in its body's frame, rc the
 // cluster's mass-weighted rest centre, q⁰ᵢ = rᵢ − rc the original rest offset, Sᵖ the cluster's
 // plastic deformation and qᵢ = Sᵖ q⁰ᵢ the current rest offset. mono(q) are the quadratic
 // monomials [qx², qy², qz², qx·qy, qy·qz, qz·qx].

@@ -1,4 +1,4 @@
-// Plastic flow of a cluster's rest shape (design.md §5, Müller et al. 2005 §4.4).
+// Plastic flow of a cluster's rest shape (docs/design.md §5.2, Müller et al. 2005 §4.4).
 #pragma once
 
 #include "sim/world/body_def.h"

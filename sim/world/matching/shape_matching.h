@@ -1,4 +1,4 @@
-// Shape-matching kernels (design.md §5): gather a cluster's moments, turn them into a goal
+// Shape-matching kernels (docs/design.md §5.1): gather a cluster's moments, turn them into a goal
 // transform. Stateless; the World calls them per cluster and per block of members.
 #pragma once
 
