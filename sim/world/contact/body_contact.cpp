@@ -9,22 +9,42 @@ namespace sb {
 
 namespace {
 
-// The contact path's closest point on a triangle: mesh::closestPointOnTriangle except inside the
-// face, where the weights come from the dot-product form (Ericson's). Kept so that the library
-// layout change leaves contact results bit-identical; it goes when contacts move to the shared
-// kernel together with the contact rework (issue 11), whose results change anyway.
+// The contact path's closest point on a triangle: Ericson's form throughout, including the
+// dot-product weights inside the face, where mesh::closestPointOnTriangle uses cross products.
+// Kept as it was so that the library layout change leaves contact results (and their cost)
+// unchanged; it goes when contacts move to the shared kernel with the contact rework, whose
+// results change anyway.
 mesh::TrianglePoint<float> closestPointForContact(const Vec3f& p, const Vec3f& a, const Vec3f& b,
                                                   const Vec3f& c) {
-  mesh::TrianglePoint<float> q = mesh::closestPointOnTriangle(p, a, b, c);
-  if (q.feature != mesh::TriangleFeature::Face) return q;
-  const Vec3f ab = b - a, ac = c - a, ap = p - a, bp = p - b, cp = p - c;
-  const float d1 = ab.dot(ap), d2 = ac.dot(ap), d3 = ab.dot(bp), d4 = ac.dot(bp);
+  using mesh::TriangleFeature;
+  const Vec3f ab = b - a, ac = c - a, ap = p - a;
+  const float d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0.0f && d2 <= 0.0f) return {Vec3f(1, 0, 0), TriangleFeature::Vertex0};
+  const Vec3f bp = p - b;
+  const float d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0.0f && d4 <= d3) return {Vec3f(0, 1, 0), TriangleFeature::Vertex1};
+  const float vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0f && d1 >= 0.0f && d3 <= 0.0f) {
+    const float t = d1 / (d1 - d3);
+    return {Vec3f(1 - t, t, 0), TriangleFeature::Edge0};
+  }
+  const Vec3f cp = p - c;
   const float d5 = ab.dot(cp), d6 = ac.dot(cp);
-  const float va = d3 * d6 - d5 * d4, vb = d5 * d2 - d1 * d6, vc = d1 * d4 - d3 * d2;
+  if (d6 >= 0.0f && d5 <= d6) return {Vec3f(0, 0, 1), TriangleFeature::Vertex2};
+  const float vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0f && d2 >= 0.0f && d6 <= 0.0f) {
+    const float t = d2 / (d2 - d6);
+    return {Vec3f(1 - t, 0, t), TriangleFeature::Edge2};
+  }
+  const float va = d3 * d6 - d5 * d4;
+  if (va <= 0.0f && d4 - d3 >= 0.0f && d5 - d6 >= 0.0f) {
+    const float t = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    return {Vec3f(0, 1 - t, t), TriangleFeature::Edge1};
+  }
   const float sum = va + vb + vc;
-  if (!(sum > 0.0f)) return {Vec3f(1, 0, 0), mesh::TriangleFeature::Vertex0};
+  if (!(sum > 0.0f)) return {Vec3f(1, 0, 0), TriangleFeature::Vertex0};  // collapsed triangle
   const float v = vb / sum, w = vc / sum;
-  return {Vec3f(1 - v - w, v, w), mesh::TriangleFeature::Face};
+  return {Vec3f(1 - v - w, v, w), TriangleFeature::Face};
 }
 
 }  // namespace
