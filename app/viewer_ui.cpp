@@ -216,19 +216,23 @@ void ViewerApp::drawBodyPanel(int body) {
         "quadratic also bending and twisting.");
     changed |=
         sliderDouble("alpha", &p.alpha, 0.0f, 1.0f, "%.3f",
-                     "Stiffness: fraction of the way to the goal per step (1 = rigid-stiff).");
+                     "Stiffness, [0, 1]: share of the way to the goal per sub-step (1 = onto the\n"
+                     "goal: rigid in rigid mode). The same at any number of clusters.");
     changed |= sliderDouble(
         "beta", &p.beta, 0.0f, 1.0f, "%.3f",
-        "Blend of the goal between rotation only (0) and the linear/quadratic fit (1).");
+        "Blend of the goal between rotation only (0) and the linear/quadratic fit (1),\n"
+        "applied as 0.9 x beta so every shape keeps a restoring force.");
     changed |=
         sliderDouble("damping", &p.damping, 0.0f, 1.0f, "%.3f",
-                     "Damping per step of the velocity relative to the body's rigid motion.");
+                     "Damping per sub-step of the velocity relative to the body's rigid motion\n"
+                     "(pinned bodies: the motion their pins allow, so a swing comes to rest).");
     changed |= sliderDouble("c_yield", &p.plasticity.yield, 0.0f, 1.0f, "%.3f",
                             "Plastic yield: stretch ||S - I|| above which the rest shape creeps.");
     changed |= sliderDouble("c_creep", &p.plasticity.creep, 0.0f, 20.0f, "%.2f",
-                            "Plastic creep rate in 1/s (0 = no plasticity).");
+                            "Plastic creep rate in 1/s (0 = no plasticity): a sub-step absorbs\n"
+                            "1 - exp(-h creep) of the stretch beyond the yield.");
     changed |= sliderDouble("c_max", &p.plasticity.max, 0.0f, 2.0f, "%.3f",
-                            "Upper bound of the permanent deformation ||Sp - I||.");
+                            "Upper bound of the permanent deformation ||Sp - I||, [0, 2].");
     if (changed) {
       try {
         world.setParams(h, p);
@@ -250,10 +254,11 @@ void ViewerApp::drawBodyPanel(int body) {
       tooltip("Replace the scene's explicit clusters with a grid of cells.");
     } else {
       if (ImGui::RadioButton("single cluster", &kind, 0)) rebuild = true;
-      tooltip("One cluster with every particle: the stiffest body.");
+      tooltip("One cluster with every particle: the body deforms only as a whole.");
       ImGui::SameLine();
       if (ImGui::RadioButton("grid", &kind, 1)) rebuild = true;
-      tooltip("Overlapping cubic cells over the rest shape: smaller cells = floppier body.");
+      tooltip("Overlapping cubic cells over the rest shape: smaller cells = finer local detail\n"
+              "(the stiffness is alpha's and beta's at any number of clusters).");
       clusters.kind = kind == 1 ? ClusterDef::Kind::Grid : ClusterDef::Kind::Single;
     }
     const glm::vec3 extent = v.boundsMax - v.boundsMin;

@@ -27,6 +27,12 @@ namespace sb {
 
 using MatX3f = Eigen::Matrix<float, Eigen::Dynamic, 3>;
 
+// Pinned particles weigh this many times their mass in every fit (clusters, the whole-body
+// level, the rigid motion damping keeps): immovable, so a goal passes through its pins instead
+// of the pins being pulled along by the rest of the body. Large enough that a rigid bar pinned
+// at one face sags well under a millimetre, small enough to keep the fits well conditioned.
+constexpr float kPinnedWeightFactor = 1e4f;
+
 // A fixed range of one cluster's memberships whose moments are summed together (large clusters
 // are split so their sums run in parallel).
 struct MomentTask {
@@ -50,7 +56,9 @@ struct BodyModel {
   // Particles with the same clusters (sim/world/matching/particle_groups.h); empty when there is
   // little to share. Goal sums are formed per group; so are the moments of non-quadratic bodies.
   ParticleGroups groups;
-  Eigen::VectorXf matchWeight;  // wᵢ = mᵢ / (number of clusters of i): conserves momentum, #P
+  // wᵢ = mᵢ / (number of clusters of i), × kPinnedWeightFactor for pinned particles (#P, kg):
+  // with these weights the clusters conserve momentum (bodies without pins).
+  Eigen::VectorXf matchWeight;
   Eigen::VectorXf invCount;     // 1 / (number of clusters of i), #P
   std::vector<ClusterRestModel> clusterRest;  // #C
   // Per membership (parallel to clusterMembers.items): q⁰ = r − rc (#M×3, m) and the member's
@@ -62,6 +70,13 @@ struct BodyModel {
   bool wholeBodyCluster = false;  // exactly one cluster holding every particle in order
   // Clusters of at most kBatchMaxMembers members, eight per batch (cluster_batch.h).
   std::vector<ClusterBatch> batches;
+  // The whole-body level (bodies with several clusters, cluster_state.h): one cluster over
+  // every particle, weights mᵢ (pinned: × kPinnedWeightFactor; also the weights of the rigid
+  // motion of pinned bodies), its rest model and shape (linear and quadratic parts, Sᵖ = I).
+  bool wholeBodyLevel = false;
+  Eigen::VectorXf bodyWeight;  // #P, kg
+  ClusterRestModel bodyRest;
+  ClusterShape bodyShape;
   // Body–body contact: the closed surface (may be empty) and its adjacency, the surface's mean
   // edge length at rest (m) and the inverse masses contacts use (1/kg; 0 = pinned, #P).
   std::vector<mesh::Triangle> surface;
@@ -82,9 +97,17 @@ std::shared_ptr<BodyModel> withClusters(const BodyModel& base, const ClusterDef&
 
 // What changes every step.
 struct BodyState {
-  MatX3f x;  // positions (m), #P×3: written by Integrate, Contacts, Collide (and drags: v only)
-  MatX3f v;  // velocities (m/s), #P×3: written by External, Integrate, Damping, Contacts, Collide
-  ClusterState clusters;  // per-cluster runtime state: written by Goals (see cluster_state.h)
+  // Positions (m), #P×3: written by Predict, Project, WholeBody, Contacts, Collide.
+  MatX3f x;
+  // Velocities (m/s), #P×3: written by External, Velocities, Damping, Contacts, Collide.
+  MatX3f v;
+  // Per-cluster runtime state: written by Goals and WholeBody (see cluster_state.h).
+  ClusterState clusters;
+  // Written by Predict, read by Velocities: the predicted positions x̂ and the velocities
+  // carried with them (#P×3), and the body's angular momentum about its centre before the
+  // sub-step (kg·m²/s; zero for pinned bodies).
+  MatX3f xPred, vPred;
+  Vec3 spin = Vec3::Zero();
 };
 
 // Start positions and velocities, identity plastic state, goals = the rest shape.

@@ -29,7 +29,8 @@ struct ClusterDef {
     Explicit,  // user-given particle index lists
   };
   Kind kind = Kind::Single;
-  // Grid: edge length of a cell in metres (> 0). Smaller cells = more clusters = floppier.
+  // Grid: edge length of a cell in metres (> 0). Smaller cells = more clusters = finer local
+  // deformation; the body's large-scale stiffness is α's and β's (the whole-body level).
   double cellSize = 0.5;
   // Grid: each cell also takes particles within this distance of it, in metres (≥ 0). Overlap
   // couples neighbouring clusters; 0 leaves cells disjoint (the body falls apart into pieces).
@@ -51,12 +52,20 @@ struct PlasticityParams {
 // Parameters that may change at any time while the body runs (no rebuild needed).
 struct BodyParams {
   Mode mode = Mode::Linear;
-  double alpha = 0.5;  // α in [0, 1]: fraction of the way to the goal per step; 1 = rigid-stiff
-  double beta = 0.5;   // β in [0, 1]: 0 = rigid-like goals, 1 = fully linear/quadratic goals
+  // α in [0, 1]: the fraction of the way from the predicted positions x̂ = x + h·v + h²·g to the
+  // goals per sub-step h; 1 = onto the goal (rigid mode: rigid at any time step). As a
+  // stiffness per unit mass, k = α / ((1 − α)·h²) (1/s²). The same α drives the whole-body
+  // level of clustered bodies, so the stiffness does not depend on the clusters.
+  double alpha = 0.5;
+  // β in [0, 1]: blend of the goal from the best rotation (0) toward the linear/quadratic fit,
+  // applied as 0.9·β (shape_matching.h): even β = 1 keeps a restoring force on every shape.
+  double beta = 0.5;
   // Linear mode: divide A by ∛det(A) so the goal keeps the rest volume.
   bool preserveVolume = true;
-  // Damping in [0, 1] per step of the velocity relative to the body's rigid motion (linear and
-  // angular velocity fitted to all particles); rigid motion itself is never damped.
+  // Damping in [0, 1] per sub-step of the velocity relative to the body's rigid motion (linear
+  // and angular velocity with the body's momenta, pinned particles immovable: a pinned body's
+  // rigid motion is only what its pins allow, so its swing is damped); free rigid motion is
+  // never damped.
   double damping = 0.0;
   PlasticityParams plasticity;
 };
@@ -70,8 +79,9 @@ struct BodyDef {
   std::vector<double> masses;
   double totalMass = 1.0;        // kg, > 0; used when masses is empty
   Vec3 velocity = Vec3::Zero();  // initial velocity of every particle, m/s
-  // Particles held in place (indices within the body). They keep their start position and take
-  // part in shape matching with their ordinary mass, so they never become infinite weights.
+  // Particles held in place (indices within the body). They keep their start position and weigh
+  // as immovable (10⁴ × their mass, body.h) in every fit: a cluster's goal passes through its
+  // pins, so a rigid body pinned at one face does not sag.
   std::vector<int> pinned;
   // The body's closed surface for body–body contact: triangles of particle indices,
   // counter-clockwise seen from outside (normally the cage's faces). It must be a closed,

@@ -41,6 +41,15 @@ void buildClusters(BodyModel& m, const ClusterDef& clusters) {
     m.invCount[i] = 1.0f / float(m.particleClusters.size(i));
     m.matchWeight[i] = m.mass[i] * m.invCount[i];
   }
+  for (int p : m.pinned) m.matchWeight[p] *= kPinnedWeightFactor;
+  m.wholeBodyLevel = nc > 1;
+  if (m.wholeBodyLevel) {
+    std::vector<int> all(static_cast<size_t>(n));
+    for (int i = 0; i < n; ++i) all[size_t(i)] = i;
+    m.bodyRest = buildClusterRest(all.data(), n, m.rest.col(0).data(), m.rest.col(1).data(),
+                                  m.rest.col(2).data(), m.bodyWeight.data());
+    m.bodyShape = deriveClusterShape(m.bodyRest, Mat3::Identity(), /*quadratic=*/true);
+  }
   const float* restCols[3] = {m.rest.col(0).data(), m.rest.col(1).data(), m.rest.col(2).data()};
   m.groups = buildParticleGroups(n, m.particleClusters, nc, restCols, m.matchWeight.data());
   m.wholeBodyCluster = nc == 1 && int(m.clusterMembers.items.size()) == n;
@@ -105,6 +114,8 @@ std::shared_ptr<BodyModel> buildBodyModel(const BodyDef& def,
   m->spacing = float(mesh::meanEdgeLength(m->surface, def.positions));
   m->contactInvMass = m->mass.cwiseInverse();
   for (int p : m->pinned) m->contactInvMass[p] = 0.0f;
+  m->bodyWeight = m->mass;
+  for (int p : m->pinned) m->bodyWeight[p] *= kPinnedWeightFactor;
   buildClusters(*m, def.clusters);
   return m;
 }

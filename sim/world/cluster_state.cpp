@@ -3,6 +3,7 @@
 #include <chrono>
 
 #include "sim/world/body.h"
+#include "sim/world/matching/goal_projection.h"
 #include "sim/world/matching/plasticity.h"
 
 namespace sb {
@@ -64,6 +65,19 @@ void ClusterState::reset(const BodyModel& m, const MatX3f& x) {
   batchLanes_.resize(m.batches.size());
   for (size_t k = 0; k < m.batches.size(); ++k)
     for (int l = 0; l < kBatchLanes; ++l) clusterToLane(m.batches[k].cluster[l], batchLanes_[k], l);
+  bodyRotation_ = Eigen::Quaterniond::Identity();
+  if (m.wholeBodyLevel) {
+    Vec3 centre = Vec3::Zero();
+    double weight = 0;
+    for (int i = 0; i < m.particleCount(); ++i) {
+      centre += double(m.bodyWeight[i]) * x.row(i).transpose().cast<double>();
+      weight += m.bodyWeight[i];
+    }
+    bodyRef_ = (centre / weight).cast<float>();
+  }
+  plasticRest_ = m.rest;
+  plasticBodyRest_ = m.bodyRest;
+  plasticBodyShape_ = m.bodyShape;
 }
 
 bool ClusterState::selectPath(const BodyModel& m, const BodyParams& params) {
@@ -185,6 +199,58 @@ bool ClusterState::updateBatch(const BodyModel& m, const BodyParams& params, int
     }
   }
   return bad;
+}
+
+bool ClusterState::projectWholeBody(const BodyModel& m, const BodyParams& params, MatX3f& x) {
+  const int n = m.particleCount();
+  const bool quadratic = params.mode == Mode::Quadratic;
+  const bool plastic = params.plasticity.enabled();
+  if (plastic) {
+    // The rest positions rᵢ' whose clusters each hold their plastic shape: cluster c's members
+    // sit at c' + Sᵖ(rᵢ − rc) about the centre c' of their rᵢ'; one Jacobi step per sub-step,
+    // warm-started from the last (the clusters' strains integrated into one displacement field,
+    // so the level keeps a dent instead of pulling it out).
+    MatX3f next = MatX3f::Zero(n, 3);
+    for (int c = 0; c < m.clusterCount(); ++c) {
+      const Eigen::Matrix3f S = plastic_[size_t(c)].cast<float>();
+      const Eigen::Vector3f rc = m.clusterRest[size_t(c)].centre;
+      Eigen::Vector3f centre = Eigen::Vector3f::Zero();
+      float weight = 0;
+      for (const int* i = m.clusterMembers.begin(c); i != m.clusterMembers.end(c); ++i) {
+        centre += m.matchWeight[*i] * plasticRest_.row(*i).transpose();
+        weight += m.matchWeight[*i];
+      }
+      centre /= weight;
+      for (const int* i = m.clusterMembers.begin(c); i != m.clusterMembers.end(c); ++i)
+        next.row(*i) +=
+            (centre + S * (m.rest.row(*i).transpose() - rc)).transpose() * m.invCount[*i];
+    }
+    plasticRest_ = next;
+    std::vector<int> all(static_cast<size_t>(n));
+    for (int i = 0; i < n; ++i) all[size_t(i)] = i;
+    plasticBodyRest_ = buildClusterRest(all.data(), n, plasticRest_.col(0).data(),
+                                        plasticRest_.col(1).data(), plasticRest_.col(2).data(),
+                                        m.bodyWeight.data());
+    plasticBodyShape_ = deriveClusterShape(plasticBodyRest_, Mat3::Identity(), quadratic);
+  }
+  const MatX3f& rest = plastic ? plasticRest_ : m.rest;
+  const ClusterRestModel& bodyRest = plastic ? plasticBodyRest_ : m.bodyRest;
+  const ClusterShape& bodyShape = plastic ? plasticBodyShape_ : m.bodyShape;
+  const ParticleColumns cols{{x.col(0).data(), x.col(1).data(), x.col(2).data()},
+                             {rest.col(0).data(), rest.col(1).data(), rest.col(2).data()},
+                             m.bodyWeight.data()};
+  const ClusterMoments sum =
+      accumulateMoments(cols, nullptr, 0, n, bodyRef_, bodyRest.centre, quadratic);
+  const ClusterFit fit =
+      fitCluster(sum, bodyRef_, bodyRest, bodyShape, Mat3::Identity(), bodyRotation_);
+  if (!fit.finite) return true;
+  bodyRotation_ = fit.rotation;
+  bodyRef_ = fit.centre.cast<float>();
+  const GoalTransform goal =
+      goalTransform(fit, sum, bodyRest, bodyShape, Mat3::Identity(), params);
+  const PositionColumns p{x.col(0).data(), x.col(1).data(), x.col(2).data()};
+  const RestColumns r{rest.col(0).data(), rest.col(1).data(), rest.col(2).data()};
+  return projectOntoTransform(p, r, 0, n, goal, quadratic, float(params.alpha)) != 0;
 }
 
 GoalTransform ClusterState::goal(int c) const {

@@ -6,7 +6,7 @@
 // small clusters of rigid and linear bodies without plastic flow: cluster_batch.h). Which one is
 // current, and whether the lanes' copy of the plastic shape lags behind, is this class's private
 // business: selectPath() is the only way to change path, and goals are read through goal(),
-// goalRows() and the group sums. Written by the Goals phase; read by Integrate.
+// goalRows() and the group sums. Written by the Goals and WholeBody phases; read by Project.
 #pragma once
 
 #include <cstdint>
@@ -76,7 +76,7 @@ class ClusterState {
   bool updateBatch(const BodyModel& model, const BodyParams& params, int k,
                    const Eigen::Matrix<float, Eigen::Dynamic, 3>& x, double h);
 
-  // ---- reading goals (Integrate, World::goals) ----
+  // ---- reading goals (Project, World::goals) ----
   GoalTransform goal(int c) const;
   const GoalRows* goalRows() const { return goalRows_.data(); }
   const GoalQuad* goalQuads() const { return goalQuad_.data(); }
@@ -88,6 +88,15 @@ class ClusterState {
 
   // Permanent deformation Sᵖ of cluster c (identity without plasticity).
   const Mat3& plastic(int c) const { return plastic_[size_t(c)]; }
+
+  // ---- the whole-body level (BodyModel::wholeBodyLevel) ----
+  // One cluster over every particle, fitted to x (#P×3, after the clusters' projection) and
+  // projected α of the way to its goal with the body's mode and β: it carries the body's
+  // large-scale stiffness, so a body's material does not depend on how many clusters it has
+  // (the clusters add local detail). Plastic bodies match the rest shape their clusters' plastic
+  // deformations add up to (a dent stays). Returns true when NaN/Inf appeared.
+  bool projectWholeBody(const BodyModel& model, const BodyParams& params,
+                        Eigen::Matrix<float, Eigen::Dynamic, 3>& x);
 
  private:
   void storeGoal(const GoalTransform& goal, int c);
@@ -113,6 +122,13 @@ class ClusterState {
   std::vector<ClusterBatchShape> batchShape_;
   std::vector<ClusterBatchLanes> batchLanes_;
   bool lanesShapeStale_ = true;
+  // The whole-body level: warm-start rotation and reference point of its fit; for plastic
+  // bodies the plastic rest positions (#P×3, body frame) and their rest model and shape.
+  Eigen::Quaterniond bodyRotation_ = Eigen::Quaterniond::Identity();
+  Eigen::Vector3f bodyRef_ = Eigen::Vector3f::Zero();
+  Eigen::Matrix<float, Eigen::Dynamic, 3> plasticRest_;
+  ClusterRestModel plasticBodyRest_;
+  ClusterShape plasticBodyShape_;
 };
 
 }  // namespace sb

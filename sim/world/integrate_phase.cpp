@@ -1,100 +1,25 @@
 #include "sim/world/integrate_phase.h"
 
+#include <Eigen/Geometry>
+#include <cmath>
+
 #include "sim/base/parallel_for.h"
 #include "sim/world/mass_properties.h"
+#include "sim/world/matching/goal_projection.h"
 
 namespace sb {
 
 namespace {
 
-// Integration forks from this many particles plus cluster memberships: below, the goal sums of
-// clustered bodies still gain from reading goals where the Goals phase wrote them.
+// Per-particle passes fork from this many particles plus cluster memberships: below, the goal
+// sums of clustered bodies still gain from reading goals where the Goals phase wrote them.
 constexpr long long kMinParallelIntegration = 8192;
-// Damping forks only in worlds with at least this many particles.
+// Per-body passes (predict, whole-body level, velocities, damping) fork only in worlds with at
+// least this many particles.
 constexpr long long kMinParallelBodyWork = 2048;
-
-// Müller's update of particle i toward goal g: v += α(g − x)/h + h·gravity, x += h·v, with
-// pull = α/h and (gvx, gvy, gvz) = h·gravity. Returns 1 if a non-finite value appeared: x − x is
-// 0 for finite x and NaN otherwise, and the test vectorises as an integer OR.
-[[gnu::always_inline]] inline int mullerUpdate(float* __restrict px, float* __restrict py,
-                                               float* __restrict pz, float* __restrict vx,
-                                               float* __restrict vy, float* __restrict vz, int i,
-                                               float g0, float g1, float g2, float hf, float pull,
-                                               float gvx, float gvy, float gvz) {
-  const float nvx = vx[i] + pull * (g0 - px[i]) + gvx;
-  const float nvy = vy[i] + pull * (g1 - py[i]) + gvy;
-  const float nvz = vz[i] + pull * (g2 - pz[i]) + gvz;
-  const float nx = px[i] + hf * nvx, ny = py[i] + hf * nvy, nz = pz[i] + hf * nvz;
-  vx[i] = nvx;
-  vy[i] = nvy;
-  vz[i] = nvz;
-  px[i] = nx;
-  py[i] = ny;
-  pz[i] = nz;
-  return ((nx - nx) + (ny - ny) + (nz - nz) + (nvx - nvx) + (nvy - nvy) + (nvz - nvz)) != 0.0f;
-}
-
-// v += α(g − x)/h + h·gravity ; x += h·v for particles [begin, end), with g from goal(i, g).
-// Plain restrict pointers and a goal functor taken by value keep this loop vectorised.
-// Returns non-zero if a non-finite value appeared.
-template <typename Goal>
-int integrateRange(float* __restrict px, float* __restrict py, float* __restrict pz,
-                   float* __restrict vx, float* __restrict vy, float* __restrict vz, int begin,
-                   int end, float hf, float pull, float gvx, float gvy, float gvz, Goal goal) {
-  int bad = 0;
-  for (int i = begin; i < end; ++i) {
-    float g[3];
-    goal(i, g);
-    bad |= mullerUpdate(px, py, pz, vx, vy, vz, i, g[0], g[1], g[2], hf, pull, gvx, gvy, gvz);
-  }
-  return bad;
-}
-
-// The whole-body-cluster kernels: the goal is one transform, so the loop is pure streaming.
-// Written as plain functions of restrict pointers: that is what GCC vectorises.
-int integrateLinearRange(float* __restrict px, float* __restrict py, float* __restrict pz,
-                         float* __restrict vx, float* __restrict vy, float* __restrict vz,
-                         const float* __restrict rx, const float* __restrict ry,
-                         const float* __restrict rz, int begin, int end, const GoalTransform& T,
-                         float hf, float pull, float gvx, float gvy, float gvz) {
-  const float L00 = T.L(0, 0), L01 = T.L(0, 1), L02 = T.L(0, 2);
-  const float L10 = T.L(1, 0), L11 = T.L(1, 1), L12 = T.L(1, 2);
-  const float L20 = T.L(2, 0), L21 = T.L(2, 1), L22 = T.L(2, 2);
-  const float tx = T.t.x(), ty = T.t.y(), tz = T.t.z();
-  int bad = 0;
-  for (int i = begin; i < end; ++i) {
-    const float x = rx[i], y = ry[i], z = rz[i];
-    const float g0 = L00 * x + L01 * y + L02 * z + tx;
-    const float g1 = L10 * x + L11 * y + L12 * z + ty;
-    const float g2 = L20 * x + L21 * y + L22 * z + tz;
-    bad |= mullerUpdate(px, py, pz, vx, vy, vz, i, g0, g1, g2, hf, pull, gvx, gvy, gvz);
-  }
-  return bad;
-}
-
-int integrateQuadraticRange(float* __restrict px, float* __restrict py, float* __restrict pz,
-                            float* __restrict vx, float* __restrict vy, float* __restrict vz,
-                            const float* __restrict rx, const float* __restrict ry,
-                            const float* __restrict rz, int begin, int end, const GoalTransform& T,
-                            float hf, float pull, float gvx, float gvy, float gvz) {
-  float C[3][10];  // per row: L (3), Q (6), t
-  for (int a = 0; a < 3; ++a) {
-    for (int j = 0; j < 3; ++j) C[a][j] = T.L(a, j);
-    for (int j = 0; j < 6; ++j) C[a][3 + j] = T.Q(a, j);
-    C[a][9] = T.t[a];
-  }
-  int bad = 0;
-  for (int i = begin; i < end; ++i) {
-    const float x = rx[i], y = ry[i], z = rz[i];
-    const float xx = x * x, yy = y * y, zz = z * z, xy = x * y, yz = y * z, zx = z * x;
-    float g[3];
-    for (int a = 0; a < 3; ++a)
-      g[a] = C[a][0] * x + C[a][1] * y + C[a][2] * z + C[a][3] * xx + C[a][4] * yy + C[a][5] * zz +
-             C[a][6] * xy + C[a][7] * yz + C[a][8] * zx + C[a][9];
-    bad |= mullerUpdate(px, py, pz, vx, vy, vz, i, g[0], g[1], g[2], hf, pull, gvx, gvy, gvz);
-  }
-  return bad;
-}
+// A body's turn per sub-step below which the prediction moves along the tangent (the rotation's
+// second-order term, (hω)²/2 of the radius, is below float resolution of the positions there).
+constexpr double kMinTurn = 1e-3;
 
 // g = (L·r + t + Q·mono(r))·invCount for summed goal rows [L | t] and quadratic parts Q.
 [[gnu::always_inline]] inline void evaluateQuadraticGoal(const Eigen::Matrix<float, 12, 1>& sum,
@@ -116,31 +41,20 @@ int integrateQuadraticRange(float* __restrict px, float* __restrict py, float* _
   g[2] = goal.z();
 }
 
-// Integrates particles [begin, end) of one body; returns true if a non-finite value appeared.
-bool integrateBlock(const BodyModel& m, BodyState& s, const BodyParams& params, const Vec3& gravity,
-                    double h, int begin, int end) {
-  float* px = s.x.col(0).data();
-  float* py = s.x.col(1).data();
-  float* pz = s.x.col(2).data();
-  float* vx = s.v.col(0).data();
-  float* vy = s.v.col(1).data();
-  float* vz = s.v.col(2).data();
+// Moves particles [begin, end) of one body α of the way to the blend of their clusters' goals;
+// returns true if a non-finite value appeared.
+bool projectBlock(const BodyModel& m, BodyState& s, const BodyParams& params, int begin,
+                  int end) {
+  const PositionColumns p{s.x.col(0).data(), s.x.col(1).data(), s.x.col(2).data()};
   const float* rx = m.rest.col(0).data();
   const float* ry = m.rest.col(1).data();
   const float* rz = m.rest.col(2).data();
-  const float hf = float(h);
-  const float pull = float(params.alpha / h);
-  const float gvx = float(h * gravity.x()), gvy = float(h * gravity.y()),
-              gvz = float(h * gravity.z());
+  const float alpha = float(params.alpha);
   const bool quadratic = params.mode == Mode::Quadratic;
-  auto run = [&](auto goal) {
-    return integrateRange(px, py, pz, vx, vy, vz, begin, end, hf, pull, gvx, gvy, gvz, goal) != 0;
-  };
-  if (m.wholeBodyCluster) {
-    auto kernel = quadratic ? integrateQuadraticRange : integrateLinearRange;
-    return kernel(px, py, pz, vx, vy, vz, rx, ry, rz, begin, end, s.clusters.goal(0), hf, pull, gvx, gvy,
-                  gvz) != 0;
-  }
+  auto run = [&](auto goal) { return projectRange(p, begin, end, alpha, goal) != 0; };
+  if (m.wholeBodyCluster)
+    return projectOntoTransform(p, RestColumns{rx, ry, rz}, begin, end, s.clusters.goal(0),
+                                quadratic, alpha) != 0;
   const int* start = m.particleClusters.start.data();
   const int* clusterOf = m.particleClusters.items.data();
   const float* invCount = m.invCount.data();
@@ -186,11 +100,66 @@ bool integrateBlock(const BodyModel& m, BodyState& s, const BodyParams& params, 
   });
 }
 
+PointColumns columnsOf(const MatX3f& m) {
+  return PointColumns{{m.col(0).data(), m.col(1).data(), m.col(2).data()}};
+}
+
+Eigen::Matrix3f skew(const Eigen::Vector3f& w) {
+  Eigen::Matrix3f K;
+  K << 0, -w.z(), w.y(), w.z(), 0, -w.x(), -w.y(), w.x(), 0;
+  return K;
+}
+
+// The weights a body's rigid motion is fitted with: masses, pinned particles immovable.
+const float* rigidWeights(const BodyModel& m) {
+  return m.pinned.empty() ? m.mass.data() : m.bodyWeight.data();
+}
+
 }  // namespace
 
-void runIntegratePhase(const WorkLayout& layout, const Vec3& gravity, double h,
-                       std::vector<BodySlot>& slots, const std::vector<int>& order,
-                       std::vector<char>& blockBad, std::vector<char>& bad) {
+void runPredictPhase(const WorkLayout& layout, const Vec3& gravity, double h,
+                     std::vector<BodySlot>& slots, const std::vector<int>& order) {
+  const float hf = float(h);
+  const Eigen::Vector3f fall = (h * h * gravity).cast<float>();
+  parallelFor(static_cast<int>(order.size()),
+              layout.particles >= kMinParallelBodyWork ? 2 : INT32_MAX, [&](int k) {
+                BodySlot& b = slots[size_t(order[size_t(k)])];
+                const BodyModel& m = *b.model;
+                BodyState& s = b.state;
+                const int n = m.particleCount();
+                // A pinned body has no free turn to advance and no spin to keep.
+                RigidMotion rm;
+                if (m.pinned.empty())
+                  rm = rigidMotion(columnsOf(s.x), columnsOf(s.v), m.mass.data(), n);
+                s.spin = rm.angularMomentum;
+                const double turn = h * rm.omega.norm();
+                // x̂ = x + h·v + h²·g, with the tangential h·ω × r of the body's turn replaced by
+                // the rotation (R − I)·r, r = x − xc; v̂ = v + (R − I)(v − vc): the velocities turn
+                // with the body.
+                Eigen::Matrix3f toRotation = Eigen::Matrix3f::Zero();  // R − I − h·[ω]×
+                Eigen::Matrix3f turnVelocity = Eigen::Matrix3f::Zero();  // R − I
+                if (turn > kMinTurn) {
+                  const Mat3 RmI =
+                      Eigen::AngleAxisd(turn, rm.omega / rm.omega.norm()).toRotationMatrix() -
+                      Mat3::Identity();
+                  turnVelocity = RmI.cast<float>();
+                  toRotation = turnVelocity - hf * skew(rm.omega.cast<float>());
+                }
+                const Eigen::Vector3f xc = rm.centre.cast<float>(), vc = rm.velocity.cast<float>();
+                s.vPred.resize(n, 3);
+                for (int i = 0; i < n; ++i) {
+                  const Eigen::Vector3f x = s.x.row(i).transpose(), v = s.v.row(i).transpose();
+                  s.x.row(i) = (x + hf * v + toRotation * (x - xc) + fall).transpose();
+                  s.vPred.row(i) = (v + turnVelocity * (v - vc)).transpose();
+                }
+                for (int p : m.pinned) s.x.row(p) = m.startPositions.row(p);
+                s.xPred = s.x;
+              });
+}
+
+void runProjectPhase(const WorkLayout& layout, std::vector<BodySlot>& slots,
+                     const std::vector<int>& order, std::vector<char>& blockBad,
+                     std::vector<char>& bad) {
   const std::vector<ParticleBlock>& blocks = layout.blocks;
   blockBad.assign(blocks.size(), 0);
   const long long work = layout.particles + layout.members;
@@ -205,46 +174,85 @@ void runIntegratePhase(const WorkLayout& layout, const Vec3& gravity, double h,
   parallelFor(static_cast<int>(blocks.size()), minParallel, [&](int i) {
     const ParticleBlock& blk = blocks[size_t(i)];
     BodySlot& b = slots[size_t(blk.slot)];
-    blockBad[size_t(i)] =
-        integrateBlock(*b.model, b.state, b.params, gravity, h, blk.begin, blk.end);
+    blockBad[size_t(i)] = projectBlock(*b.model, b.state, b.params, blk.begin, blk.end);
   });
   for (size_t i = 0; i < blocks.size(); ++i)
     if (blockBad[i]) bad[size_t(blocks[i].slot)] = 1;
-  // Pinned particles stay where they started.
   for (int s : order) {
     BodySlot& b = slots[size_t(s)];
-    for (int p : b.model->pinned) {
-      b.state.x.row(p) = b.model->startPositions.row(p);
-      b.state.v.row(p).setZero();
-    }
+    for (int p : b.model->pinned) b.state.x.row(p) = b.model->startPositions.row(p);
   }
+}
+
+void runWholeBodyPhase(const WorkLayout& layout, std::vector<BodySlot>& slots,
+                       const std::vector<int>& order, std::vector<char>& bad) {
+  parallelFor(static_cast<int>(order.size()),
+              layout.particles >= kMinParallelBodyWork ? 2 : INT32_MAX, [&](int k) {
+                const int s = order[size_t(k)];
+                BodySlot& b = slots[size_t(s)];
+                if (!b.model->wholeBodyLevel) return;
+                if (b.state.clusters.projectWholeBody(*b.model, b.params, b.state.x)) bad[size_t(s)] = 1;
+                for (int p : b.model->pinned) b.state.x.row(p) = b.model->startPositions.row(p);
+              });
+}
+
+void runVelocitiesPhase(const WorkLayout& layout, const Vec3& gravity, double h,
+                        std::vector<BodySlot>& slots, const std::vector<int>& order) {
+  const float invH = float(1.0 / h);
+  const Eigen::RowVector3f fallSpeed = (h * gravity).transpose().cast<float>();
+  parallelFor(static_cast<int>(order.size()),
+              layout.particles >= kMinParallelBodyWork ? 2 : INT32_MAX, [&](int k) {
+                BodySlot& b = slots[size_t(order[size_t(k)])];
+                const BodyModel& m = *b.model;
+                BodyState& s = b.state;
+                // v = v̂ + (x − x̂)/h + h·g: what the projections moved, on top of the velocity
+                // carried with the prediction (which lacks the h·g the prediction fell).
+                s.v = s.vPred + (s.x - s.xPred) * invH;
+                s.v.rowwise() += fallSpeed;
+                for (int p : m.pinned) s.v.row(p).setZero();
+                if (!m.pinned.empty()) return;
+                // The projections are torque-free about the predicted positions, not about the
+                // positions the momentum is measured at, and the chord Δx/h of a turning body
+                // is shorter than its tangent (by sin(hω)/(hω)): put the body's spin back to what
+                // it was before the sub-step.
+                const int n = m.particleCount();
+                const RigidMotion rm = rigidMotion(columnsOf(s.x), columnsOf(s.v), m.mass.data(), n);
+                const Eigen::Vector3f dw =
+                    (rm.inverseInertia * (s.spin - rm.angularMomentum)).cast<float>();
+                if (dw.isZero()) return;
+                // v += dw × (x − xc) − shift: no linear momentum in exact arithmetic; the shift,
+                // its mass-weighted mean as evaluated in float, keeps rounding from adding any.
+                const Eigen::Vector3f xc = rm.centre.cast<float>();
+                double sum[3] = {0, 0, 0};
+                for (int i = 0; i < n; ++i)
+                  for (int a = 0; a < 3; ++a) sum[a] += double(m.mass[i]) * double(s.x(i, a) - xc[a]);
+                const Eigen::Vector3f shift =
+                    dw.cross((Vec3(sum[0], sum[1], sum[2]) / m.totalMass).cast<float>());
+                const Eigen::Matrix3f K = skew(dw);
+                for (int i = 0; i < n; ++i)
+                  s.v.row(i) += (K * (s.x.row(i).transpose() - xc) - shift).transpose();
+              });
 }
 
 void runDampingPhase(const WorkLayout& layout, std::vector<BodySlot>& slots,
                      const std::vector<int>& order) {
-  std::vector<int> damped;
-  for (int s : order)
-    if (slots[size_t(s)].params.damping > 0.0) damped.push_back(s);
-  parallelFor(static_cast<int>(damped.size()),
+  parallelFor(static_cast<int>(order.size()),
               layout.particles >= kMinParallelBodyWork ? 2 : INT32_MAX, [&](int k) {
-                BodySlot& b = slots[size_t(damped[size_t(k)])];
+                BodySlot& b = slots[size_t(order[size_t(k)])];
+                const double kd = b.params.damping;
+                if (!(kd > 0.0)) return;
                 const BodyModel& m = *b.model;
                 MatX3f& x = b.state.x;
                 MatX3f& v = b.state.v;
                 const int n = m.particleCount();
-                // Fit the rigid motion (linear and angular velocity) that has the body's momenta.
-                const PointColumns xc{{x.col(0).data(), x.col(1).data(), x.col(2).data()}};
-                const PointColumns vc{{v.col(0).data(), v.col(1).data(), v.col(2).data()}};
-                const MassProperties mp = massProperties(xc, m.mass.data(), n);
-                const Vec3 centre = mp.centre;
-                const Vec3 velocity = linearMomentum(vc, m.mass.data(), n) / m.totalMass;
-                const Vec3 omega =
-                    mp.inverseInertia * angularMomentum(xc, vc, m.mass.data(), n, centre);
-                const double kd = b.params.damping;
+                // The rigid motion with the body's momenta, pinned particles immovable: a pinned
+                // body keeps only the motion its pins allow (none for three pins or more), so its
+                // swing is damped like any other deformation.
+                const RigidMotion rm = rigidMotion(columnsOf(x), columnsOf(v), rigidWeights(m), n);
                 for (int i = 0; i < n; ++i) {
-                  const Vec3 r = x.row(i).transpose().cast<double>() - centre;
+                  const Vec3 r = x.row(i).transpose().cast<double>() - rm.centre;
                   const Vec3 vi = v.row(i).transpose().cast<double>();
-                  const Vec3 rigid = velocity + omega.cross(r);
+                  const Vec3 rigid = rm.velocity + rm.omega.cross(r);
                   v.row(i) = (vi + kd * (rigid - vi)).transpose().cast<float>();
                 }
               });

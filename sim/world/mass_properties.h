@@ -24,6 +24,22 @@ struct MassProperties {
 // Points x (metres), masses in kg (> 0), `count` points.
 MassProperties massProperties(const PointColumns& x, const float* mass, int count);
 
+// The rigid motion of a set of weighted points with velocities: centre xc, velocity vc and
+// angular velocity ω with the same linear and angular momentum (ω = I⁻¹L, pseudo-inverse for
+// flat or collinear sets). Weights are masses, or masses with pinned particles made
+// immovable; then the rigid motion is what the pins allow.
+struct RigidMotion {
+  Vec3 centre = Vec3::Zero();    // xc, m
+  Vec3 velocity = Vec3::Zero();  // vc, m/s
+  Vec3 omega = Vec3::Zero();     // ω, rad/s
+  Vec3 angularMomentum = Vec3::Zero();  // L about xc, kg·m²/s (weights as masses)
+  Mat3 inverseInertia = Mat3::Zero();   // about xc, 1/(kg·m²)
+};
+// One pass over the points: float sums in eight lanes per block of 512 points, relative to the
+// first point (no cancellation far from the origin), blocks added in double.
+RigidMotion rigidMotion(const PointColumns& x, const PointColumns& v, const float* weight,
+                        int count);
+
 // Σ mᵢ xᵢ / Σ mᵢ (m).
 Vec3 centreOfMass(const PointColumns& x, const float* mass, int count);
 // Σ mᵢ vᵢ (kg·m/s).

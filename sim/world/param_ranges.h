@@ -33,7 +33,9 @@ inline constexpr ParamRange beta{0.0, 1.0};
 inline constexpr ParamRange damping{0.0, 1.0};
 inline constexpr ParamRange plasticYield{0.0, 1e6};
 inline constexpr ParamRange plasticCreep{0.0, 1e6};  // 1/s
-inline constexpr ParamRange plasticMax{0.0, 1e6};
+// ‖Sᵖ − I‖₂ ≤ 2 (a stretch up to ×3 along an axis, as the fits' own bound): beyond, Sᵖ (det 1)
+// is so anisotropic that A_qq⁻¹ of the rest shape amplifies round-off into far-away goals.
+inline constexpr ParamRange plasticMax{0.0, 2.0};
 inline constexpr ParamRange bodyMass{1e-9, 1e9};      // kg, a body's total mass
 inline constexpr ParamRange particleMass{1e-12, 1e9};  // kg, one particle's mass
 inline constexpr ParamRange cellSize{1e-6, 1e6};       // m, grid clusters

@@ -12,19 +12,23 @@ namespace sb {
 
 enum class Phase : int {
   External,    // drags and queued forces change velocities
-  Goals,       // per cluster: centre of mass, moments, rotation, goal transform
+  Predict,     // x̂ = x + h·v + h²·gravity (the body's turn as a rotation)
+  Goals,       // per cluster: centre of mass, moments, rotation, goal transform (fitted to x̂)
   Plasticity,  // per cluster: plastic flow of the rest shape (measured inside Goals)
-  Integrate,   // per particle: blend the cluster goals, Müller's update of v and x
+  Project,     // per particle: α of the way to the blend of its clusters' goals
+  WholeBody,   // bodies with several clusters: the whole-body level's fit and projection
+  Velocities,  // v from the positions' change; the body's spin kept
   Damping,     // velocities relative to each body's rigid motion damped
   Contacts,    // body–body contact: bounds, grids, detection, response
   Collide,     // static colliders
   Check,       // NaN/Inf detection and reset
 };
 
-inline constexpr int kPhaseCount = 8;
+inline constexpr int kPhaseCount = 11;
 inline constexpr std::array<Phase, kPhaseCount> kPhases = {
-    Phase::External, Phase::Goals,    Phase::Plasticity, Phase::Integrate,
-    Phase::Damping,  Phase::Contacts, Phase::Collide,    Phase::Check,
+    Phase::External,  Phase::Predict,    Phase::Goals,   Phase::Plasticity,
+    Phase::Project,   Phase::WholeBody,  Phase::Velocities, Phase::Damping,
+    Phase::Contacts,  Phase::Collide,    Phase::Check,
 };
 
 // Lower-case name ("goals"), used as label and as key in files.

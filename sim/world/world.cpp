@@ -100,11 +100,14 @@ void World::Data::substep(double h, StepProfile& prof) {
   bad.assign(slots.size(), 0);
 
   timed(Phase::External, [&] { runExternalPhase(forces, drags, h, slots); });
+  timed(Phase::Predict, [&] { runPredictPhase(layout, settings.gravity, h, slots, order); });
   const GoalsTimes goals = runGoalsPhase(layout, h, slots, goalsScratch, bad);
   prof[Phase::Goals] += goals.goals;
   prof[Phase::Plasticity] += goals.plasticity;
-  timed(Phase::Integrate,
-        [&] { runIntegratePhase(layout, settings.gravity, h, slots, order, blockBad, bad); });
+  timed(Phase::Project, [&] { runProjectPhase(layout, slots, order, blockBad, bad); });
+  timed(Phase::WholeBody, [&] { runWholeBodyPhase(layout, slots, order, bad); });
+  timed(Phase::Velocities,
+        [&] { runVelocitiesPhase(layout, settings.gravity, h, slots, order); });
   timed(Phase::Damping, [&] { runDampingPhase(layout, slots, order); });
   timed(Phase::Contacts, [&] {
     const ContactSettings contact{settings.bodyContact, float(settings.contactFriction)};

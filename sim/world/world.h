@@ -3,14 +3,19 @@
 // One step runs the phases of step_phases.h in a fixed order, each in its own file with what it
 // reads and writes (docs/design.md §3):
 //   External    drag constraints and queued forces change velocities      (external_phase.h)
-//   Goals       per cluster: centre of mass, moments, rotation, goal;      (goals_phase.h)
+//   Predict     x̂ = x + h·v + h²·gravity, the body's turn as a rotation   (integrate_phase.h)
+//   Goals       per cluster, fitted to x̂: centre of mass, moments, rotation, goal (goals_phase.h)
 //   Plasticity  plastic flow of the rest shape (plastic bodies only)
-//   Integrate   per particle: blend its clusters' goals, v += α(g − x)/h + h·gravity,
-//               x += h·v  (Müller et al. 2005: stable for every h when α ≤ 1)   (integrate_phase.h)
+//   Project     per particle: x ← x̂ + α(ḡ − x̂), ḡ the blend of its clusters' goals
+//   WholeBody   bodies with several clusters: one cluster over the whole body, projected the
+//               same way, so the material does not depend on the number of clusters
+//   Velocities  v = v̂ + (x − x̂)/h + h·gravity, the body's spin kept
 //   Damping     damp velocity relative to each body's rigid motion
 //   Contacts    particles pushed out of other bodies' surfaces, friction  (contact_phase.h)
 //   Collide     the same against the static colliders
 //   Check       bodies with NaN/Inf are reset to their start and reported as events
+// The step is position-based and stable at any time step (for α ≤ 1 it maps a deformation to
+// at most √(1 − α) of itself per sub-step); rigid mode with α = 1 keeps the shape exactly.
 // Results depend only on the input and never on the thread count: every sum is formed in a
 // fixed order over fixed-size blocks. Accepted parameter ranges: param_ranges.h.
 #pragma once

@@ -274,7 +274,9 @@ TEST(Damping, DampsDeformation) {
     Eigen::MatrixX3d x = toMatrix(def.positions);
     x.col(1) *= 0.5;
     world.setState(b, x, Eigen::MatrixX3d::Zero(x.rows(), 3));
-    for (int s = 0; s < 300; ++s) world.step();
+    // 40 steps: the position-based sub-step loses deformation energy by itself (each projection
+    // starts from the prediction), so by 300 steps both runs are at round-off.
+    for (int s = 0; s < 40; ++s) world.step();
     return kineticEnergy(world, b);
   };
   EXPECT_LT(residual(0.3), 1e-3 * residual(0.0));
@@ -409,7 +411,7 @@ TEST(Determinism, BitIdenticalAcrossRunsAndThreadCounts) {
   EXPECT_EQ(one, again);
   EXPECT_EQ(one, two);
   // Golden value: changes only when the simulation's arithmetic changes on purpose.
-  EXPECT_EQ(one, 0x4f6ac34b06fe0d49ULL) << std::hex << one;
+  EXPECT_EQ(one, 0xccb6ddefe33d29f9ULL) << std::hex << one;
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 
 #include "sim/world/matching/cluster_layout.h"
 #include "sim/world/matching/cluster_rest.h"
+#include "sim/world/matching/shape_matching.h"
 #include "test_util.h"
 
 namespace sb {
@@ -44,6 +45,15 @@ BodyDef gridBody(Mode mode, bool clustered) {
   return def;
 }
 
+// Goals at β = 1 for positions x whose full fit is `fit`: the World applies β as kBetaMax·β, so
+// the goal is kBetaMax of the way from the rigid goal to the fit.
+Eigen::MatrixX3d betaOneGoals(const BodyDef& def, const Eigen::MatrixX3d& x,
+                              const Eigen::MatrixX3d& fit) {
+  BodyDef rigid = def;
+  rigid.params.mode = Mode::Rigid;
+  return kBetaMax * fit + (1.0 - kBetaMax) * goalsFor(rigid, x);
+}
+
 double relError(const Eigen::MatrixX3d& a, const Eigen::MatrixX3d& b) {
   return (a - b).rowwise().norm().maxCoeff() /
          (b.colwise().maxCoeff() - b.colwise().minCoeff()).norm();
@@ -73,7 +83,8 @@ TEST(ShapeMatching, LinearReproducesAnyAffineMap) {
       const Vec3 t(u(rng), u(rng), u(rng));
       const BodyDef def = gridBody(Mode::Linear, clustered);
       const Eigen::MatrixX3d x = applyAffine(def.positions, A, t);
-      EXPECT_LT(relError(goalsFor(def, x), x), 2e-6) << "clustered " << clustered << " k " << k;
+      EXPECT_LT(relError(goalsFor(def, x), betaOneGoals(def, x, x)), 2e-6)
+          << "clustered " << clustered << " k " << k;
     }
 }
 
@@ -85,7 +96,7 @@ TEST(ShapeMatching, VolumePreservingLinearNormalisesDeterminant) {
   const Mat3 shear = (Mat3() << 1, 0.4, 0, 0, 1, 0.2, 0, 0, 1).finished();
   const Mat3 R = test::randomRotation(rng);
   Eigen::MatrixX3d x = applyAffine(def.positions, R * shear, Vec3(1, 2, 3));
-  EXPECT_LT(relError(goalsFor(def, x), x), 2e-6);
+  EXPECT_LT(relError(goalsFor(def, x), betaOneGoals(def, x, x)), 2e-6);
   // det A = 1.5: goals follow A / ∛1.5 about the centre of mass; det A = 8: the restoring scale
   // is capped at 1.25 per step (a crushed or blown-up cluster recovers over several steps).
   for (const auto& [det, divisor] : {std::pair<double, double>{1.5, std::cbrt(1.5)}, {8.0, 1.25}}) {
@@ -95,7 +106,7 @@ TEST(ShapeMatching, VolumePreservingLinearNormalisesDeterminant) {
     const Eigen::RowVector3d shift =
         x.colwise().mean() - expected.colwise().mean();  // equal masses
     expected.rowwise() += shift;
-    EXPECT_LT(relError(goalsFor(def, x), expected), 2e-6) << det;
+    EXPECT_LT(relError(goalsFor(def, x), betaOneGoals(def, x, expected)), 2e-6) << det;
   }
 }
 
@@ -114,7 +125,8 @@ TEST(ShapeMatching, QuadraticReproducesAnyQuadraticMap) {
       for (size_t i = 0; i < def.positions.size(); ++i)
         x.row(int(i)) =
             (A * def.positions[i] + Q * monomials<double>(def.positions[i]) + t).transpose();
-      EXPECT_LT(relError(goalsFor(def, x), x), 2e-5) << "clustered " << clustered << " k " << k;
+      EXPECT_LT(relError(goalsFor(def, x), betaOneGoals(def, x, x)), 2e-5)
+          << "clustered " << clustered << " k " << k;
       // Linear mode cannot: the bend is really there.
       EXPECT_GT(relError(goalsFor(gridBody(Mode::Linear, clustered), x), x), 1e-3);
     }
@@ -157,17 +169,40 @@ TEST(ClusterLayout, GridCoversEveryParticleAndOverlapSharesThem) {
   ClusterDef def;
   def.kind = ClusterDef::Kind::Grid;
   def.cellSize = 0.5;
-  def.overlap = 0.0;
-  std::vector<int> count(rest.size(), 0);
-  for (const auto& c : buildClusterMembers(def, rest))
-    for (int p : c) ++count[size_t(p)];
-  for (int c : count) EXPECT_EQ(c, 1);  // disjoint cells partition the body
   def.overlap = 0.5;  // one whole cell on every side: interior particles are in 27 clusters
-  std::fill(count.begin(), count.end(), 0);
+  std::vector<int> count(rest.size(), 0);
   for (const auto& c : buildClusterMembers(def, rest))
     for (int p : c) ++count[size_t(p)];
   EXPECT_EQ(*std::max_element(count.begin(), count.end()), 27);
   EXPECT_GE(*std::min_element(count.begin(), count.end()), 1);
+}
+
+// Disjoint cells (or explicit clusters that share no particle) would let the body come apart:
+// such layouts are refused, naming the field.
+TEST(ClusterLayout, RejectsLayoutsThatDoNotHoldTheBodyTogether) {
+  const std::vector<Vec3> rest = jitteredGrid(9, 2.0, Vec3::Zero(), 3);  // spacing 0.25 m
+  ClusterDef def;
+  def.kind = ClusterDef::Kind::Grid;
+  def.cellSize = 0.5;
+  for (double overlap : {0.0, 0.01}) {
+    def.overlap = overlap;
+    try {
+      buildClusterMembers(def, rest);
+      ADD_FAILURE() << "accepted overlap " << overlap;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("clusters.overlap"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("come apart"), std::string::npos) << e.what();
+    }
+  }
+  def.overlap = 0.15;  // more than half the spacing: neighbouring cells share particles
+  EXPECT_NO_THROW(buildClusterMembers(def, rest));
+  ClusterDef split;
+  split.kind = ClusterDef::Kind::Explicit;
+  split.clusters = {{0, 1, 2, 3}, {3, 4, 5, 6}, {7, 8, 9, 10}};
+  for (int p = 11; p < int(rest.size()); ++p) split.clusters[2].push_back(p);
+  EXPECT_THROW(buildClusterMembers(split, rest), std::invalid_argument);
+  split.clusters[1].push_back(7);  // now the three are joined
+  EXPECT_NO_THROW(buildClusterMembers(split, rest));
 }
 
 TEST(ClusterLayout, RejectsBadDefinitions) {

@@ -256,9 +256,10 @@ TEST(ShippedScenes, PlasticityKeepsADentAfterTheImpact) {
       beforeImpact, atEnd, settled, later, dentAtEnd, dentLater, elasticDent);
 }
 
-// The same mesh with the same parameters, one cluster vs many: once both have settled the
-// clustered body sags much further from its rest shape, and it deforms more while landing.
-TEST(ShippedScenes, ClustersMakeTheSameBodyFloppier) {
+// The same mesh with the same parameters, one cluster vs many: the material is the same, so the
+// body deforms about as much either way (the whole-body level carries the large-scale stiffness;
+// the clusters add local detail), at rest and while landing.
+TEST(ShippedScenes, ClusterCountDoesNotChangeTheStiffness) {
   Scene scene = loadScene(scenePath("clusters"));
   ASSERT_EQ(scene.bodies.size(), 2u);
   int stiff = 0, floppy = 1;
@@ -287,8 +288,10 @@ TEST(ShippedScenes, ClustersMakeTheSameBodyFloppier) {
   }
   const double stiffRest = test::maxDeviationFromRigidFit(scene, stiff);
   const double floppyRest = test::maxDeviationFromRigidFit(scene, floppy);
-  EXPECT_GT(floppyRest, 2.0 * stiffRest);
-  EXPECT_GT(floppyMax, 1.2 * stiffMax);
+  EXPECT_LT(floppyRest, 1.5 * stiffRest);
+  EXPECT_GT(floppyRest, stiffRest / 1.5);
+  EXPECT_LT(floppyMax, 1.3 * stiffMax);
+  EXPECT_GT(floppyMax, stiffMax / 1.3);
   std::printf(
       "[ scene    ] clusters: deviation from a rigid fit at rest %.4f m (1 cluster) vs "
       "%.4f m (%d clusters); largest while landing %.4f m vs %.4f m\n",

@@ -391,7 +391,7 @@ matchClusterBatch(const ClusterBatch& batch, const ClusterBatchShape& shape,
     }
     const F8 limit = splat(float(kMaxFitDeparture));
     const F8 shrink = select(dep2 > limit * limit, limit / sqrt8(dep2), one);
-    const F8 beta = splat(float(params.beta));
+    const F8 beta = splat(float(appliedBeta(params.beta)));
     for (int e = 0; e < 9; ++e) {
       const F8 bounded = R.m[e] + shrink * (A.m[e] - R.m[e]);
       T.m[e] = beta * bounded + (one - beta) * R.m[e];

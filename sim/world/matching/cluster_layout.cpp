@@ -86,10 +86,32 @@ std::vector<std::vector<int>> gridClusters(const ClusterDef& def, const std::vec
   return kept;
 }
 
-}  // namespace
+// Number of groups of clusters that share no particle with each other (clusters that share a
+// particle are joined; union–find over the particles' first clusters).
+int disconnectedGroups(const std::vector<std::vector<int>>& clusters, int particleCount) {
+  std::vector<int> parent(clusters.size());
+  for (size_t c = 0; c < parent.size(); ++c) parent[c] = int(c);
+  auto find = [&](int c) {
+    while (parent[size_t(c)] != c) c = parent[size_t(c)] = parent[size_t(parent[size_t(c)])];
+    return c;
+  };
+  std::vector<int> firstCluster(static_cast<size_t>(particleCount), -1);
+  for (size_t c = 0; c < clusters.size(); ++c)
+    for (int p : clusters[c]) {
+      int& first = firstCluster[size_t(p)];
+      if (first < 0) {
+        first = int(c);
+      } else {
+        const int a = find(first), b = find(int(c));
+        if (a != b) parent[size_t(std::max(a, b))] = std::min(a, b);
+      }
+    }
+  int groups = 0;
+  for (size_t c = 0; c < parent.size(); ++c) groups += find(int(c)) == int(c);
+  return groups;
+}
 
-std::vector<std::vector<int>> buildClusterMembers(const ClusterDef& def,
-                                                  const std::vector<Vec3>& rest) {
+std::vector<std::vector<int>> layoutClusters(const ClusterDef& def, const std::vector<Vec3>& rest) {
   const int n = static_cast<int>(rest.size());
   if (n == 0) throw std::invalid_argument("positions: a body needs at least one particle");
   switch (def.kind) {
@@ -126,6 +148,27 @@ std::vector<std::vector<int>> buildClusterMembers(const ClusterDef& def,
     }
   }
   throw std::invalid_argument("clusters.kind: unknown");
+}
+
+}  // namespace
+
+std::vector<std::vector<int>> buildClusterMembers(const ClusterDef& def,
+                                                  const std::vector<Vec3>& rest) {
+  std::vector<std::vector<int>> clusters = layoutClusters(def, rest);
+  // Clusters hold a body together only through the particles they share: a layout that falls
+  // into groups sharing none would let the body come apart.
+  const int groups = disconnectedGroups(clusters, static_cast<int>(rest.size()));
+  if (groups > 1) {
+    if (def.kind == ClusterDef::Kind::Grid)
+      throw std::invalid_argument(
+          "clusters.overlap: the grid's clusters fall into " + std::to_string(groups) +
+          " groups that share no particle, so the body would come apart; make the overlap (" +
+          std::to_string(def.overlap) + " m) at least about half the particle spacing");
+    throw std::invalid_argument("clusters.clusters: the clusters fall into " +
+                                std::to_string(groups) +
+                                " groups that share no particle, so the body would come apart");
+  }
+  return clusters;
 }
 
 }  // namespace sb

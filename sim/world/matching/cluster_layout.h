@@ -13,6 +13,8 @@ namespace sb {
 // cell's cluster holds the particles inside the cell grown by def.overlap on every side. Cells
 // with fewer than 4 particles are dropped, and every particle left in no cluster joins the
 // cluster whose cell centre is nearest, so each particle belongs to at least one cluster.
+// Clusters must hold the body together: a layout whose clusters fall into groups that share no
+// particle is rejected (for a grid: an overlap below about half the particle spacing).
 // Throws std::invalid_argument with the field name ("clusters.cellSize", ...) and the reason.
 std::vector<std::vector<int>> buildClusterMembers(const ClusterDef& def,
                                                   const std::vector<Vec3>& restPositions);

@@ -11,7 +11,9 @@ double spectralNorm(const Mat3& M);
 
 // One plastic update over a step of h seconds, given the cluster's current stretch S (symmetric,
 // from A = R·S relative to the current rest shape):
-//   if ‖S − I‖₂ > c_yield:  Sᵖ ← (I + h·c_creep·(S − I))·Sᵖ, then Sᵖ ← Sᵖ / ∛det Sᵖ
+//   if ‖S − I‖₂ > c_yield:  Sᵖ ← sym((I + f·(S − I))·Sᵖ), f = 1 − e^(−h·c_creep) ≤ 1 (never
+//                           past the current shape; Müller's h·c_creep for small h·c_creep),
+//                           sym = the symmetric polar factor, then Sᵖ ← Sᵖ / ∛det Sᵖ
 //   if ‖Sᵖ − I‖₂ > c_max:   Sᵖ ← I + c_max·(Sᵖ − I)/‖Sᵖ − I‖₂, renormalised
 // Keeps det Sᵖ = 1 and ‖Sᵖ − I‖₂ ≤ c_max. Returns true when Sᵖ changed. A stretch that is not
 // finite or would make det ≤ 0 leaves Sᵖ unchanged.

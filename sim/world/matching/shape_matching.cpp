@@ -149,7 +149,7 @@ GoalTransform goalTransform(const ClusterFit& fit, const ClusterMoments& m,
                             const ClusterRestModel& rest, const ClusterShape& shape,
                             const Mat3& plastic, const BodyParams& params) {
   const Mat3 R = fit.rotation.matrix();
-  const double beta = params.beta;
+  const double beta = appliedBeta(params.beta);
   Mat3 Tlin = R;                                                            // acts on q
   Eigen::Matrix<double, 3, 6> Tquad = Eigen::Matrix<double, 3, 6>::Zero();  // acts on mono(q) − μ
   switch (params.mode) {

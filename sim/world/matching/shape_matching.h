@@ -49,6 +49,16 @@ ClusterMoments accumulateMoments(const ParticleColumns& p, const int* members, i
 constexpr double kMinVolumeScale = 0.8;
 constexpr double kMaxFitDeparture = 2.0;
 
+// The blend β of the goal toward the linear/quadratic fit is applied as kBetaMax·β: even at
+// β = 1 the goal keeps a tenth of the rotation's, so no deformation is free of restoring force.
+// With the whole fit as goal (β exactly 1) every deformation the fit can represent costs
+// nothing, and energy put into one (an impact, the stretch of a turning body) made bodies drift
+// to unbounded sizes (docs/design.md §5.1).
+constexpr double kBetaMax = 0.9;
+inline double appliedBeta(double beta) {
+  return kBetaMax * beta;
+}
+
 // Goal of a cluster for particle i, as a polynomial of its rest position rᵢ (body frame):
 //   gᵢ = L·rᵢ + Q·mono(rᵢ) + t.
 // Expressing goals in rᵢ (not in per-cluster offsets) lets a particle average the goals of all its

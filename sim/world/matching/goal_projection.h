@@ -1,0 +1,57 @@
+// Moving particles toward their goals: x ← x + α(g − x) for a range of particles, with g from a
+// goal transform of the rest positions (docs/design.md §5.3). Stateless kernels, written over
+// plain restrict pointers so that GCC vectorises them; each returns non-zero when a non-finite
+// position appeared (x − x is 0 for finite x and NaN otherwise: an integer OR in the loop).
+#pragma once
+
+#include "sim/world/matching/shape_matching.h"
+
+namespace sb {
+
+// Positions as #P-long columns (metres); the three columns do not overlap.
+struct PositionColumns {
+  float* x;
+  float* y;
+  float* z;
+};
+// Rest positions in the body frame as #P-long columns (metres).
+struct RestColumns {
+  const float* x;
+  const float* y;
+  const float* z;
+};
+
+[[gnu::always_inline]] inline int projectParticle(float* __restrict px, float* __restrict py,
+                                                  float* __restrict pz, int i, float g0, float g1,
+                                                  float g2, float alpha) {
+  const float nx = px[i] + alpha * (g0 - px[i]);
+  const float ny = py[i] + alpha * (g1 - py[i]);
+  const float nz = pz[i] + alpha * (g2 - pz[i]);
+  px[i] = nx;
+  py[i] = ny;
+  pz[i] = nz;
+  return ((nx - nx) + (ny - ny) + (nz - nz)) != 0.0f;
+}
+
+// Particles [begin, end) toward goal(i, g) (g: 3 floats); a goal functor taken by value and
+// restrict pointers keep the loop vectorised.
+template <typename Goal>
+int projectRange(const PositionColumns& p, int begin, int end, float alpha, Goal goal) {
+  float* __restrict px = p.x;
+  float* __restrict py = p.y;
+  float* __restrict pz = p.z;
+  int bad = 0;
+  for (int i = begin; i < end; ++i) {
+    float g[3];
+    goal(i, g);
+    bad |= projectParticle(px, py, pz, i, g[0], g[1], g[2], alpha);
+  }
+  return bad;
+}
+
+// Particles [begin, end) toward one goal transform g = L·r + t (+ Q·mono(r) when quadratic):
+// a body with one cluster, or the whole-body level. Pure streaming.
+int projectOntoTransform(const PositionColumns& p, const RestColumns& r, int begin, int end,
+                         const GoalTransform& T, bool quadratic, float alpha);
+
+}  // namespace sb
