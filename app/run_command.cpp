@@ -1,5 +1,7 @@
 // `softbody run`: steps a scene without a window, exports frames, prints per-phase timings.
 #include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <vector>
@@ -29,6 +31,46 @@ void printTimings(const RunTotals& totals, long long particles) {
   std::printf("%.1f steps per second (simulation%s)\n", steps / totals.seconds(),
               totals.deformSeconds > 0 ? " and render-mesh deform" : " only");
 }
+
+// What a person watches to see whether a run settles: kinetic energy, the fastest particle, and
+// the largest growth of any body's size (largest distance of a particle from its body's centre,
+// relative to the start).
+class RunMonitor {
+ public:
+  explicit RunMonitor(const World& world) : world_(world) {
+    for (BodyHandle b : world.bodies()) startRadius_.push_back(radius(b));
+  }
+  void print(int contacts) const {
+    double energy = 0, fastest = 0, growth = 0;
+    const std::vector<BodyHandle> bodies = world_.bodies();
+    for (size_t k = 0; k < bodies.size(); ++k) {
+      const BodyHandle b = bodies[k];
+      const Eigen::VectorXf m = world_.masses(b);
+      const ConstPointsRef v = world_.velocities(b);
+      for (int i = 0; i < v.rows(); ++i) {
+        const double s2 = double(v.row(i).squaredNorm());
+        energy += 0.5 * double(m[i]) * s2;
+        fastest = std::max(fastest, std::sqrt(s2));
+      }
+      if (k < startRadius_.size() && startRadius_[k] > 0)
+        growth = std::max(growth, radius(b) / startRadius_[k] - 1.0);
+    }
+    std::printf("  t %8.3f s  kinetic %11.5g J  fastest %10.4g m/s  growth %+8.3f %%  contacts %d\n",
+                world_.time(), energy, fastest, 100.0 * growth, contacts);
+  }
+
+ private:
+  double radius(BodyHandle b) const {
+    const Vec3 c = world_.centreOfMass(b);
+    const ConstPointsRef x = world_.positions(b);
+    double r = 0;
+    for (int i = 0; i < x.rows(); ++i)
+      r = std::max(r, (x.row(i).transpose().cast<double>() - c).norm());
+    return r;
+  }
+  const World& world_;
+  std::vector<double> startRadius_;
+};
 
 // A CLI11 check of a number against the range the World accepts (sim/world/param_ranges.h).
 CLI::Validator inRange(const ParamRange& range) {
@@ -61,6 +103,7 @@ int runHeadlessCommand(int argc, char** argv) {
   std::string format = "obj";
   int threads = 0;
   bool noDeform = false;
+  int monitor = 0;
   cli.add_option("scene", scenePath, "Scene file (JSON)")->required();
   cli.add_option("--steps", steps, "Number of steps to run (≥ 1)")
       ->required()
@@ -76,6 +119,10 @@ int runHeadlessCommand(int argc, char** argv) {
       ->check(CLI::IsMember({"obj", "bin"}));
   cli.add_option("--threads", threads, "Simulation threads (default: all cores)")
       ->check(CLI::Range(1, 256));
+  cli.add_option("--monitor", monitor,
+                 "Every K steps print the time, kinetic energy, fastest particle, largest "
+                 "growth of a body and contacts (to watch a run settle)")
+      ->check(CLI::Range(1, 100000000));
   cli.add_flag("--no-deform", noDeform,
                "Do not update the render meshes each step (by default they follow the "
                "particles every step, as in the viewer)");
@@ -118,6 +165,7 @@ int runHeadlessCommand(int argc, char** argv) {
       scenePath.c_str(), scene.bodies.size(), particles, renderVertices, settings.timeStep,
       settings.substeps, threadCount());
 
+  RunMonitor watch(scene.world);
   int exported = 0;
   for (int s = 1; s <= steps; ++s) {
     runner.step([&](const WorldEvent& e) {
@@ -134,6 +182,7 @@ int runHeadlessCommand(int argc, char** argv) {
       }
       ++exported;
     }
+    if (monitor > 0 && s % monitor == 0) watch.print(scene.world.lastContactCount());
   }
   for (const SceneBody& b : scene.bodies) {
     const Vec3 c = scene.world.centreOfMass(b.handle);
