@@ -15,13 +15,12 @@
 #include <stdexcept>
 #include <sys/stat.h>
 
-#include <omp.h>
-
 #include <Eigen/Dense>
 #include <Eigen/Geometry>
 #include <Eigen/SparseCore>
 
 #include "sim/base/file_io.h"
+#include "sim/base/parallel_for.h"
 #include "sim/cage/mvc.h"
 #include "sim/mesh/closed_surface.h"
 
@@ -326,7 +325,7 @@ void Embedding::deform(ConstPointsRef cagePositions, PointsRowMajor& out) const 
                                 " cage positions, the embedding has " + std::to_string(cols_));
   out.resize(rows_, 3);
   // Memory-bound: stream W once, row by row, against the cage coordinates as three contiguous
-  // float arrays (a few KB, in L1). Rows are independent: static OpenMP split.
+  // float arrays (a few KB, in L1). Rows are independent: one range per thread (sim/base/parallel_for.h).
   const int m = cols_;
   std::vector<float> cx(static_cast<std::size_t>(m)), cy(static_cast<std::size_t>(m)), cz(static_cast<std::size_t>(m));
   for (int j = 0; j < m; ++j) {
@@ -348,8 +347,7 @@ void Embedding::deform(ConstPointsRef cagePositions, PointsRowMajor& out) const 
     const int* outer = sparseF_.outerIndexPtr();
     const int* inner = sparseF_.innerIndexPtr();
     const float* val = sparseF_.valuePtr();
-#pragma omp parallel for schedule(static) if (n > 2000)
-    for (int i = 0; i < n; ++i) {
+    parallelFor(n, 2001, [&](int i) {
       // Four independent accumulators hide the add latency.
       v4sf a0 = {0.0f, 0.0f, 0.0f, 0.0f}, a1 = a0, a2 = a0, a3 = a0;
       int k = outer[i];
@@ -365,11 +363,10 @@ void Embedding::deform(ConstPointsRef cagePositions, PointsRowMajor& out) const 
       o[3 * static_cast<std::size_t>(i)] = acc[0];
       o[3 * static_cast<std::size_t>(i) + 1] = acc[1];
       o[3 * static_cast<std::size_t>(i) + 2] = acc[2];
-    }
+    });
   } else {
     const float* W = denseF_.data();
-#pragma omp parallel for schedule(static) if (n > 2000)
-    for (int i = 0; i < n; ++i) {
+    parallelFor(n, 2001, [&](int i) {
       const float* w = W + static_cast<std::size_t>(i) * static_cast<std::size_t>(m);
       float sx = 0.0f, sy = 0.0f, sz = 0.0f;
 #pragma omp simd reduction(+ : sx, sy, sz)
@@ -381,7 +378,7 @@ void Embedding::deform(ConstPointsRef cagePositions, PointsRowMajor& out) const 
       o[3 * static_cast<std::size_t>(i)] = sx;
       o[3 * static_cast<std::size_t>(i) + 1] = sy;
       o[3 * static_cast<std::size_t>(i) + 2] = sz;
-    }
+    });
   }
 }
 
@@ -603,7 +600,7 @@ Embedding bindMeanValue(const std::vector<Vec3>& points, const TriangleMesh& cag
 
   bool sparse = options.storage == WeightStorage::Sparse ||
                 (options.storage == WeightStorage::Auto && m > options.denseMaxCageVertices);
-  const int threads = options.threads > 0 ? options.threads : omp_get_max_threads();
+  const int threads = options.threads > 0 ? std::min(options.threads, threadCount()) : threadCount();
   // Memory first (BindOptions::maxWeightBytes): dense keeps a double and a float copy.
   const double denseBytes = 12.0 * double(n) * double(m);
   const bool denseTooBig = denseBytes > double(options.maxWeightBytes);
@@ -665,13 +662,11 @@ Embedding bindMeanValue(const std::vector<Vec3>& points, const TriangleMesh& cag
   const int block = 256;
   for (int start = 0; start < n; start += block) {
     const int end = std::min(n, start + block);
-#pragma omp parallel num_threads(threads)
-    {
+    parallelRanges(end - start, 2, threads, [&](int rangeBegin, int rangeEnd) {
       MeanValueCage::Scratch scratch;
       std::vector<double> w(static_cast<std::size_t>(m));
       std::vector<Vec3> q;
-#pragma omp for schedule(static)
-      for (int i = start; i < end; ++i) {
+      for (int i = start + rangeBegin; i < start + rangeEnd; ++i) {
         const Vec3& x = points[static_cast<std::size_t>(i)];
         MvcInfo info;
         if (!prepared.weights(x, w.data(), scratch, &info)) failed[i] = 1;
@@ -694,7 +689,7 @@ Embedding bindMeanValue(const std::vector<Vec3>& points, const TriangleMesh& cag
           linErr[i] = linErr0[i];
         }
       }
-    }
+    });
     if (options.progress) options.progress(static_cast<std::size_t>(end), static_cast<std::size_t>(n));
   }
   for (int i = 0; i < n; ++i) {

@@ -20,7 +20,7 @@ namespace sb::cage {
 // Figures about a bind, filled by bindMeanValue (and kept in the cache file).
 struct BindStats {
   double seconds = 0.0;              // wall time of the weight computation (0 when cached)
-  int threads = 1;                   // OpenMP threads used
+  int threads = 1;                   // threads used
   bool fromCache = false;
   double minWeight = 0.0, maxWeight = 0.0;  // over the stored weights
   std::int64_t negativeCount = 0;    // stored weights < 0 (kept, never clamped)
@@ -39,7 +39,7 @@ struct BindStats {
 enum class WeightStorage { Auto, Dense, Sparse };
 
 struct BindOptions {
-  int threads = 0;  // OpenMP threads for the bind (0 = OpenMP default)
+  int threads = 0;  // threads for the bind, at most threadCount() (0 = threadCount(); sim/base/parallel.h)
   // Auto: dense when the cage has at most denseMaxCageVertices vertices; otherwise pruned and
   // sparse, unless pruning keeps more than half the entries on a sample of 64 points (then
   // dense, unpruned).
