@@ -12,6 +12,7 @@
 #include <CLI/CLI.hpp>
 
 #include "app/commands.h"
+#include "sim/base/parallel.h"
 #include "sim/mesh/closed_surface.h"
 #include "sim/cage/embedding.h"
 #include "sim/mesh/mesh_io.h"
@@ -44,6 +45,7 @@ BindOptions makeOptions(const std::string& cacheDir, int threads, const std::str
                         bool progress) {
   BindOptions o;
   o.cacheDir = cacheDir;
+  if (threads > 0) setThreadCount(threads);  // the pool the bind runs on (sim/base/parallel.h)
   o.threads = threads;
   o.pruneThreshold = prune;
   if (storage == "dense") o.storage = cage::WeightStorage::Dense;
@@ -68,7 +70,7 @@ BindOptions makeOptions(const std::string& cacheDir, int threads, const std::str
 
 void addCommonOptions(CLI::App& app, std::string& cacheDir, int& threads, std::string& storage, double& prune) {
   app.add_option("--cache-dir", cacheDir, "Directory for cached binds (reused when mesh, cage and options match)");
-  app.add_option("--threads", threads, "OpenMP threads for the bind (0 = all)")->check(CLI::Range(0, 1024));
+  app.add_option("--threads", threads, "Threads for the bind (0 = all cores)")->check(CLI::Range(0, 1024));
   app.add_option("--storage", storage, "Weight storage: auto, dense or sparse")
       ->check(CLI::IsMember({"auto", "dense", "sparse"}));
   app.add_option("--prune", prune, "Sparse pruning: fraction of each row's absolute weight mass that may be dropped")

@@ -4,7 +4,7 @@
 set -euo pipefail
 packages=(
   cmake g++ make pkg-config libgtest-dev libbenchmark-dev
-  libglfw3-dev libglm-dev libimgui-dev libeigen3-dev libopenmesh-dev
+  libglfw3-dev libglm-dev libimgui-dev libeigen3-dev
   libstb-dev nlohmann-json3-dev libcli11-dev
   xvfb xauth libgl1-mesa-dri mesa-utils x11-apps imagemagick xdotool
 )

@@ -15,13 +15,12 @@
 #include <stdexcept>
 #include <sys/stat.h>
 
-#include <omp.h>
-
 #include <Eigen/Dense>
 #include <Eigen/Geometry>
 #include <Eigen/SparseCore>
 
 #include "sim/base/file_io.h"
+#include "sim/base/parallel_for.h"
 #include "sim/cage/mvc.h"
 #include "sim/mesh/closed_surface.h"
 
@@ -130,6 +129,51 @@ BindStats statsFromList(const std::vector<double>& v) {
   return s;
 }
 constexpr std::size_t kStatsCount = 15;
+
+// What passed the checksum is still checked before use (a file re-sealed by hand, a bug in an
+// older writer): every statistic finite and in its range — the counts whole numbers that fit
+// before they are cast — ...
+BindStats checkedStats(const std::vector<double>& v, std::int64_t rows, std::int64_t cols,
+                       const std::string& path) {
+  auto bad = [&](const char* what) {
+    throw std::runtime_error(path + ": implausible statistic " + what + " (file not written by this program)");
+  };
+  for (double x : v)
+    if (!std::isfinite(x)) bad("(not finite)");
+  auto count = [&](double x, double hi, const char* what) {
+    if (!(x >= 0.0 && x <= hi && x == std::floor(x))) bad(what);
+  };
+  const double entries = double(rows) * double(cols);
+  if (!(v[0] >= 0.0 && v[0] <= 1e9)) bad("seconds");
+  count(v[1], 65536, "threads");
+  if (v[2] != 0.0 && v[2] != 1.0) bad("fromCache");
+  if (!(v[3] <= v[4])) bad("minWeight > maxWeight");
+  count(v[5], entries, "negativeCount");
+  for (int i = 6; i <= 10; ++i)
+    if (!(v[size_t(i)] >= 0.0 && v[size_t(i)] <= 1e6)) bad("error bound");
+  count(v[11], entries, "nonZeros");
+  if (!(v[12] >= 0.0)) bad("worstConditioning");
+  count(v[13], double(rows), "farPoints");
+  count(v[14], double(rows), "onCagePoints");
+  return statsFromList(v);
+}
+
+// ... and every row of weights sums to 1 (mean value coordinates are a partition of unity,
+// and pruning restores the sum exactly): a file with scaled or shuffled weights is refused.
+void checkRowSums(const Embedding& e, const std::string& path) {
+  std::vector<std::pair<int, double>> row;
+  for (int i = 0; i < e.meshVertexCount(); ++i) {
+    e.rowWeights(i, row);
+    double sum = 0.0, magnitude = 0.0;
+    for (const auto& [j, w] : row) {
+      sum += w;
+      magnitude += std::abs(w);
+    }
+    if (!(std::abs(sum - 1.0) <= 1e-5 * std::max(1.0, magnitude)))
+      throw std::runtime_error(path + ": weights of point " + std::to_string(i) + " sum to " +
+                               std::to_string(sum) + ", not 1 (file not written by this program)");
+  }
+}
 
 // The bind cache's folder may not exist yet (a fresh cache directory).
 void writeCacheFile(const std::string& path, const std::string& data) {
@@ -281,7 +325,7 @@ void Embedding::deform(ConstPointsRef cagePositions, PointsRowMajor& out) const 
                                 " cage positions, the embedding has " + std::to_string(cols_));
   out.resize(rows_, 3);
   // Memory-bound: stream W once, row by row, against the cage coordinates as three contiguous
-  // float arrays (a few KB, in L1). Rows are independent: static OpenMP split.
+  // float arrays (a few KB, in L1). Rows are independent: one range per thread (sim/base/parallel_for.h).
   const int m = cols_;
   std::vector<float> cx(static_cast<std::size_t>(m)), cy(static_cast<std::size_t>(m)), cz(static_cast<std::size_t>(m));
   for (int j = 0; j < m; ++j) {
@@ -303,8 +347,7 @@ void Embedding::deform(ConstPointsRef cagePositions, PointsRowMajor& out) const 
     const int* outer = sparseF_.outerIndexPtr();
     const int* inner = sparseF_.innerIndexPtr();
     const float* val = sparseF_.valuePtr();
-#pragma omp parallel for schedule(static) if (n > 2000)
-    for (int i = 0; i < n; ++i) {
+    parallelFor(n, 2001, [&](int i) {
       // Four independent accumulators hide the add latency.
       v4sf a0 = {0.0f, 0.0f, 0.0f, 0.0f}, a1 = a0, a2 = a0, a3 = a0;
       int k = outer[i];
@@ -320,11 +363,10 @@ void Embedding::deform(ConstPointsRef cagePositions, PointsRowMajor& out) const 
       o[3 * static_cast<std::size_t>(i)] = acc[0];
       o[3 * static_cast<std::size_t>(i) + 1] = acc[1];
       o[3 * static_cast<std::size_t>(i) + 2] = acc[2];
-    }
+    });
   } else {
     const float* W = denseF_.data();
-#pragma omp parallel for schedule(static) if (n > 2000)
-    for (int i = 0; i < n; ++i) {
+    parallelFor(n, 2001, [&](int i) {
       const float* w = W + static_cast<std::size_t>(i) * static_cast<std::size_t>(m);
       float sx = 0.0f, sy = 0.0f, sz = 0.0f;
 #pragma omp simd reduction(+ : sx, sy, sz)
@@ -336,7 +378,7 @@ void Embedding::deform(ConstPointsRef cagePositions, PointsRowMajor& out) const 
       o[3 * static_cast<std::size_t>(i)] = sx;
       o[3 * static_cast<std::size_t>(i) + 1] = sy;
       o[3 * static_cast<std::size_t>(i) + 2] = sz;
-    }
+    });
   }
 }
 
@@ -409,6 +451,11 @@ Embedding Embedding::load(const std::string& path, std::array<std::uint64_t, 2>*
   } catch (const FileError& e) {
     throw std::runtime_error(e.what());
   }
+  return fromBytes(data, path, key);
+}
+
+Embedding Embedding::fromBytes(const std::string& data, const std::string& path,
+                               std::array<std::uint64_t, 2>* key) {
   if (data.size() < 8 + 8 * 8 || std::memcmp(data.data(), kMagic, 8) != 0)
     throw std::runtime_error(path + ": not a softbody weight file (bad magic)");
   std::uint64_t stored;
@@ -467,8 +514,13 @@ Embedding Embedding::load(const std::string& path, std::array<std::uint64_t, 2>*
     if (!W.allFinite()) throw std::runtime_error(path + ": non-finite weight");
     e = fromDense(std::move(W));
   }
-  e.stats_ = statsFromList(st);
+  e.stats_ = checkedStats(st, rows, cols, path);
+  checkRowSums(e, path);
   return e;
+}
+
+std::uint64_t weightFileChecksum(const std::string& bytesBeforeChecksum) {
+  return checksum(bytesBeforeChecksum);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -490,6 +542,7 @@ std::array<std::uint64_t, 2> bindCacheKey(const std::vector<Vec3>& points, const
     h.value(static_cast<std::int64_t>(options.denseMaxCageVertices));
     h.value(options.pruneThreshold);
     h.value(static_cast<std::uint64_t>(options.keepDoublePrecision ? 1 : 0));
+    h.value(options.maxWeightBytes);  // can switch the storage
     key[s] = h.digest();
   }
   return key;
@@ -547,8 +600,38 @@ Embedding bindMeanValue(const std::vector<Vec3>& points, const TriangleMesh& cag
 
   bool sparse = options.storage == WeightStorage::Sparse ||
                 (options.storage == WeightStorage::Auto && m > options.denseMaxCageVertices);
-  const int threads = options.threads > 0 ? options.threads : omp_get_max_threads();
-  if (sparse && options.storage == WeightStorage::Auto && n > 0) {
+  const int threads = options.threads > 0 ? std::min(options.threads, threadCount()) : threadCount();
+  // Memory first (BindOptions::maxWeightBytes): dense keeps a double and a float copy.
+  const double denseBytes = 12.0 * double(n) * double(m);
+  const bool denseTooBig = denseBytes > double(options.maxWeightBytes);
+  if (denseTooBig && options.storage == WeightStorage::Dense)
+    throw std::runtime_error("bind: dense weights for " + std::to_string(n) + " points × " + std::to_string(m) +
+                             " cage vertices need " + formatBytes(std::uint64_t(denseBytes)) + ", more than the " +
+                             formatBytes(options.maxWeightBytes) + " allowed; use sparse storage");
+  if (denseTooBig) sparse = true;
+  if (sparse && n > 0) {
+    // Sparse: estimate the kept weights on the same kind of sample as below.
+    const int samples = std::min(n, 64);
+    MeanValueCage::Scratch scratch;
+    std::vector<double> w(static_cast<std::size_t>(m));
+    std::vector<Vec3> q(static_cast<std::size_t>(m));
+    std::vector<std::pair<int, double>> row;
+    std::int64_t kept = 0;
+    for (int k = 0; k < samples; ++k) {
+      const Vec3& x = points[static_cast<std::size_t>(static_cast<std::int64_t>(k) * n / samples)];
+      if (!prepared.weights(x, w.data(), scratch)) continue;
+      for (int j = 0; j < m; ++j) q[j] = (cage.vertices[j] - x) / L;
+      pruneRow(row, w.data(), m, q, options.pruneThreshold);
+      kept += static_cast<std::int64_t>(row.size());
+    }
+    const double sparseBytes = 52.0 * double(kept) / double(samples) * double(n);
+    if (sparseBytes > double(options.maxWeightBytes))
+      throw std::runtime_error("bind: the weights for " + std::to_string(n) + " points × " + std::to_string(m) +
+                               " cage vertices need about " + formatBytes(std::uint64_t(sparseBytes)) +
+                               " even sparse, more than the " + formatBytes(options.maxWeightBytes) +
+                               " allowed (BindOptions::maxWeightBytes)");
+  }
+  if (sparse && options.storage == WeightStorage::Auto && n > 0 && !denseTooBig) {
     // Auto: decide on a sample of up to 64 evenly spaced points whether pruning keeps at most
     // half of the entries; otherwise store dense and unpruned.
     const int samples = std::min(n, 64);
@@ -579,13 +662,11 @@ Embedding bindMeanValue(const std::vector<Vec3>& points, const TriangleMesh& cag
   const int block = 256;
   for (int start = 0; start < n; start += block) {
     const int end = std::min(n, start + block);
-#pragma omp parallel num_threads(threads)
-    {
+    parallelRanges(end - start, 2, threads, [&](int rangeBegin, int rangeEnd) {
       MeanValueCage::Scratch scratch;
       std::vector<double> w(static_cast<std::size_t>(m));
       std::vector<Vec3> q;
-#pragma omp for schedule(static)
-      for (int i = start; i < end; ++i) {
+      for (int i = start + rangeBegin; i < start + rangeEnd; ++i) {
         const Vec3& x = points[static_cast<std::size_t>(i)];
         MvcInfo info;
         if (!prepared.weights(x, w.data(), scratch, &info)) failed[i] = 1;
@@ -608,7 +689,7 @@ Embedding bindMeanValue(const std::vector<Vec3>& points, const TriangleMesh& cag
           linErr[i] = linErr0[i];
         }
       }
-    }
+    });
     if (options.progress) options.progress(static_cast<std::size_t>(end), static_cast<std::size_t>(n));
   }
   for (int i = 0; i < n; ++i) {

@@ -20,7 +20,7 @@ namespace sb::cage {
 // Figures about a bind, filled by bindMeanValue (and kept in the cache file).
 struct BindStats {
   double seconds = 0.0;              // wall time of the weight computation (0 when cached)
-  int threads = 1;                   // OpenMP threads used
+  int threads = 1;                   // threads used
   bool fromCache = false;
   double minWeight = 0.0, maxWeight = 0.0;  // over the stored weights
   std::int64_t negativeCount = 0;    // stored weights < 0 (kept, never clamped)
@@ -39,7 +39,7 @@ struct BindStats {
 enum class WeightStorage { Auto, Dense, Sparse };
 
 struct BindOptions {
-  int threads = 0;  // OpenMP threads for the bind (0 = OpenMP default)
+  int threads = 0;  // threads for the bind, at most threadCount() (0 = threadCount(); sim/base/parallel.h)
   // Auto: dense when the cage has at most denseMaxCageVertices vertices; otherwise pruned and
   // sparse, unless pruning keeps more than half the entries on a sample of 64 points (then
   // dense, unpruned).
@@ -51,6 +51,11 @@ struct BindOptions {
   // (see README.md).
   double pruneThreshold = 0.01;
   bool keepDoublePrecision = true;  // keep the double weights (rowWeights, deformDouble); float always
+  // Memory the weights may take at most (bytes, estimated before binding: dense 12 bytes per
+  // point × cage vertex, sparse about 52 bytes per kept weight at the peak). Auto storage
+  // switches to sparse when dense would exceed it; a bind that still exceeds it is refused with
+  // the figure (std::runtime_error) instead of exhausting memory.
+  std::uint64_t maxWeightBytes = std::uint64_t(4) << 30;
   std::string cacheDir;             // empty = no cache
   // Called from the calling thread after each block of points: (points done, total).
   std::function<void(std::size_t, std::size_t)> progress;
@@ -90,9 +95,13 @@ class Embedding {
 
   // Binary file (format in README.md) with a checksum; save is atomic (temp file + rename).
   // load throws std::runtime_error on any inconsistency (bad magic, size, checksum, index), and
-  // reads only regular files of at most 16 GB (sim/base/file_io.h).
+  // on content that passed the checksum but is not what a bind writes (a statistic out of its
+  // range, a row of weights not summing to 1); it reads only regular files of at most 16 GB
+  // (sim/base/file_io.h). fromBytes does the same on bytes in memory (`name` in messages).
   void save(const std::string& path, const std::array<std::uint64_t, 2>& key = {0, 0}) const;
   static Embedding load(const std::string& path, std::array<std::uint64_t, 2>* key = nullptr);
+  static Embedding fromBytes(const std::string& data, const std::string& name,
+                             std::array<std::uint64_t, 2>* key = nullptr);
 
  private:
   void makeFloat();
@@ -106,6 +115,10 @@ class Embedding {
   SparseF sparseF_;
   BindStats stats_;
 };
+
+// The checksum a weight file ends with, over all bytes before it (tools and tests that build
+// or re-seal files; the fuzz target re-seals its inputs to reach the checks behind it).
+std::uint64_t weightFileChecksum(const std::string& bytesBeforeChecksum);
 
 // The cache key: a 128-bit hash of the points, the cage vertices and triangles and the options
 // that change the result (storage rule, threshold, precision), plus the file format version.

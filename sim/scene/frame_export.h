@@ -1,7 +1,11 @@
-// Writing simulated frames to disk for batch runs.
+// Writing simulated frames to disk for batch runs, and reading them back (tests, tools).
 #pragma once
 
+#include <array>
+#include <cstdint>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "sim/scene/scene.h"
 
@@ -19,5 +23,33 @@ enum class FrameFormat {
 // Writes the scene's current particle positions to `path`. Atomic (sim/base/file_io.h);
 // throws FileError (a std::runtime_error) naming the path on failure.
 void writeFrame(const Scene& scene, const std::string& path, FrameFormat format);
+
+// A frame read back: per body its name (OBJ only; "" in binary frames), positions and faces
+// (OBJ only; indices within the body, 0-based).
+struct FrameBody {
+  std::string name;
+  PointsRowMajor positions;
+  std::vector<std::array<int, 3>> triangles;
+};
+struct Frame {
+  double time = 0;  // s
+  std::vector<FrameBody> bodies;
+};
+
+class FrameError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Largest frame file read: 256 MB (a frame of the large scene is about 100 KB binary).
+inline constexpr std::uint64_t kMaxFrameFileBytes = 256ull * 1000 * 1000;
+
+// Reads a frame file written by writeFrame: a regular file of at most kMaxFrameFileBytes,
+// binary when it starts with "SBFRAME1", else OBJ. Throws FrameError naming the path and
+// reason; a body that does not match its header (counts, truncation, extra bytes), a face
+// index outside its object or a non-finite position is refused.
+Frame readFrame(const std::string& path);
+// The same on bytes in memory (`name` in messages); bounded by bytes.size() whatever they say.
+Frame parseFrame(const std::string& bytes, FrameFormat format, const std::string& name);
 
 }  // namespace sb

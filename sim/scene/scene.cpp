@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <iterator>
+#include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -24,6 +26,28 @@ using nlohmann::json;
 constexpr std::uint64_t kMaxSceneBytes = 64ull << 20;
 
 namespace {
+
+// An integer JSON number as int64; false when it does not fit (2^63 and above).
+bool jsonInt64(const json& v, long long& out) {
+  if (v.is_number_unsigned()) {
+    const std::uint64_t u = v.get<std::uint64_t>();
+    if (u > std::uint64_t(std::numeric_limits<long long>::max())) return false;
+    out = static_cast<long long>(u);
+    return true;
+  }
+  if (!v.is_number_integer()) return false;
+  out = v.get<std::int64_t>();
+  return true;
+}
+
+// A particle index from a scene (pinned, explicit clusters): an integer in [0, 2^31 − 1], read
+// without truncation; whether it names a particle of the body the World checks.
+bool particleIndex(const json& v, int& out) {
+  long long i = 0;
+  if (!jsonInt64(v, i) || i < 0 || i > std::numeric_limits<int>::max()) return false;
+  out = static_cast<int>(i);
+  return true;
+}
 
 // Reads one JSON object, remembering which keys were used so unknown (mistyped) keys can be
 // reported instead of silently ignored.
@@ -54,10 +78,10 @@ class Fields {
   int integer(const std::string& key, int fallback, const ParamRange& range) {
     if (!has(key)) return fallback;
     const json& v = j_.at(key);
+    long long d = 0;
     if (!v.is_number_integer()) fail(key, "must be an integer");
-    const long long d = v.get<long long>();
-    if (!range.contains(double(d)))
-      fail(key, "must be in " + describe(range) + ", got " + std::to_string(d));
+    if (!jsonInt64(v, d) || !range.contains(double(d)))
+      fail(key, "must be in " + describe(range) + ", got " + v.dump());
     return static_cast<int>(d);
   }
   bool boolean(const std::string& key, bool fallback) {
@@ -174,7 +198,10 @@ ClusterDef parseClusters(Fields& f) {
       std::vector<int> members;
       for (const json& i : c) {
         if (!i.is_number_integer()) f.fail("clusters", "particle indices must be integers");
-        members.push_back(i.get<int>());
+        int index = 0;
+        if (!particleIndex(i, index))
+          f.fail("clusters", "particle index " + i.dump() + " is out of range [0, 2147483647]");
+        members.push_back(index);
       }
       d.clusters.push_back(std::move(members));
     }
@@ -230,7 +257,10 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMe
     if (!p.is_array()) f.fail("pinned", "must be an array of particle indices");
     for (const json& i : p) {
       if (!i.is_number_integer()) f.fail("pinned", "particle indices must be integers");
-      def.pinned.push_back(i.get<int>());
+      int index = 0;
+      if (!particleIndex(i, index))
+        f.fail("pinned", "particle index " + i.dump() + " is out of range [0, 2147483647]");
+      def.pinned.push_back(index);
     }
   }
   f.rejectUnknown();
@@ -281,18 +311,126 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMe
   return sb;
 }
 
+// Builds the DOM like json::parse, and also refuses duplicate keys (JSON leaves them undefined;
+// nlohmann keeps the last silently) and reports every error with its line and field path.
+class CheckedSax {
+ public:
+  CheckedSax(json& root, const char* begin, const char* const* cursor)
+      : dom_(root, true), begin_(begin), cursor_(cursor) {}
+  bool null() { return value() && dom_.null(); }
+  bool boolean(bool v) { return value() && dom_.boolean(v); }
+  bool number_integer(json::number_integer_t v) { return value() && dom_.number_integer(v); }
+  bool number_unsigned(json::number_unsigned_t v) { return value() && dom_.number_unsigned(v); }
+  bool number_float(json::number_float_t v, const std::string& s) { return value() && dom_.number_float(v, s); }
+  bool string(std::string& v) { return value() && dom_.string(v); }
+  bool binary(json::binary_t& v) { return value() && dom_.binary(v); }
+  bool start_object(std::size_t n) {
+    value();
+    frames_.push_back({false, -1, "", {}});
+    return dom_.start_object(n);
+  }
+  bool key(std::string& k) {
+    Frame& f = frames_.back();
+    f.key = k;
+    if (!f.keys.insert(k).second) {
+      error_ = "line " + std::to_string(lineAt(size_t(*cursor_ - begin_))) + ": " + path() +
+               ": duplicate key (each key may appear once per object)";
+      return false;
+    }
+    return dom_.key(k);
+  }
+  bool end_object() {
+    frames_.pop_back();
+    return dom_.end_object();
+  }
+  bool start_array(std::size_t n) {
+    value();
+    frames_.push_back({true, -1, "", {}});
+    return dom_.start_array(n);
+  }
+  bool end_array() {
+    frames_.pop_back();
+    return dom_.end_array();
+  }
+  bool parse_error(std::size_t position, const std::string&, const nlohmann::detail::exception& e) {
+    const std::string field = path();
+    error_ = "line " + std::to_string(lineAt(position)) + ": " + (field.empty() ? "" : field + ": ") +
+             "invalid JSON (" + e.what() + ")";
+    return false;
+  }
+  const std::string& error() const { return error_; }
+
+ private:
+  struct Frame {
+    bool array;
+    long index;
+    std::string key;
+    std::set<std::string> keys;
+  };
+  bool value() {
+    if (!frames_.empty() && frames_.back().array) ++frames_.back().index;
+    return true;
+  }
+  std::string path() const {
+    std::string p;
+    for (const Frame& f : frames_) {
+      if (f.array) {
+        if (f.index >= 0) p += "[" + std::to_string(f.index) + "]";
+      } else if (!f.key.empty()) {
+        p += (p.empty() ? "" : ".") + f.key;
+      }
+    }
+    return p;
+  }
+  long lineAt(size_t offset) const {
+    const char* end = begin_ + offset;
+    return 1 + std::count(begin_, end, '\n');
+  }
+  nlohmann::detail::json_sax_dom_parser<json> dom_;
+  const char* begin_;
+  const char* const* cursor_;
+  std::vector<Frame> frames_;
+  std::string error_;
+};
+
+// A char iterator that tells how far the parser has read (for the line of a duplicate key).
+struct TrackingIterator {
+  using iterator_category = std::forward_iterator_tag;
+  using value_type = char;
+  using difference_type = std::ptrdiff_t;
+  using pointer = const char*;
+  using reference = const char&;
+  const char* p;
+  const char** cursor;
+  reference operator*() const { return *p; }
+  TrackingIterator& operator++() {
+    *cursor = ++p;
+    return *this;
+  }
+  TrackingIterator operator++(int) {
+    TrackingIterator old = *this;
+    ++*this;
+    return old;
+  }
+  bool operator==(const TrackingIterator& o) const { return p == o.p; }
+  bool operator!=(const TrackingIterator& o) const { return p != o.p; }
+};
+
+json parseJson(const std::string& text, const std::string& name) {
+  json root;
+  const char* cursor = text.data();
+  CheckedSax sax(root, text.data(), &cursor);
+  const bool ok = json::sax_parse(TrackingIterator{text.data(), &cursor},
+                                  TrackingIterator{text.data() + text.size(), &cursor}, &sax);
+  if (!ok || !sax.error().empty())
+    throw SceneError(name + ": " + (sax.error().empty() ? "invalid JSON" : sax.error()));
+  return root;
+}
+
 }  // namespace
 
 Scene parseScene(const std::string& text, const std::string& name, const std::string& baseDir) {
-  json root;
-  try {
-    root = json::parse(text);
-  } catch (const json::parse_error& e) {
-    // nlohmann reports the byte offset; turn it into a line number for people.
-    const size_t upto = std::min<size_t>(e.byte, text.size());
-    const long line = 1 + std::count(text.begin(), text.begin() + long(upto), '\n');
-    throw SceneError(name + ": line " + std::to_string(line) + ": invalid JSON (" + e.what() + ")");
-  }
+  const json root = parseJson(text, name);
   Fields top(root, "", name);
   WorldSettings settings;
   if (top.has("world")) {

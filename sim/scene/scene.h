@@ -62,9 +62,13 @@ struct Scene {
 };
 
 // Loads a scene. Relative mesh paths are resolved against the scene file's folder. Throws
-// SceneError naming the file, field and reason; nothing is returned half-loaded.
+// SceneError naming the file, field and reason; nothing is returned half-loaded. Reads only a
+// regular file of at most 64 MB (sim/base/file_io.h: folders, FIFOs and devices are refused);
+// its meshes are read by sim/mesh/mesh_io.h (512 MB each), bind caches by sim/cage/embedding.h.
 Scene loadScene(const std::string& path);
 // Parses a scene from JSON text; `name` is used in messages and `baseDir` resolves mesh paths.
+// Strict JSON: a key given twice in one object, a number beyond double range or an integer
+// index beyond int range is an error naming the line and the field (bodies[2].scale).
 Scene parseScene(const std::string& jsonText, const std::string& name, const std::string& baseDir);
 // Writes the scene with the world's current settings and body parameters. Atomic: writes a
 // temporary file beside the target and renames it. Throws SceneError when it cannot write.

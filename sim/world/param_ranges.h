@@ -47,6 +47,13 @@ inline constexpr double speedLimit = 1e4;       // m/s, |component| of initial v
 inline constexpr double angleLimit = 1e4;       // degrees, |component| of Euler angles
 inline constexpr ParamRange scale{1e-9, 1e9};   // uniform scale of a body's mesh
 inline constexpr ParamRange radius{1e-9, 1e6};  // m, sphere and capsule colliders
+// What the float32 particle state can carry (float resolves about 6e-8 of a coordinate): a
+// body of two or more particles must be at least minBodyExtent across (diagonal of its
+// bounding box) and at least minExtentToDistance times the distance of its farthest particle
+// from the origin; smaller, its shape drowns in round-off (a body at scale 1e-6 spreads to
+// metres). So a 1 mm body may sit up to 10 m from the origin, a 1 m body up to 10 km.
+inline constexpr double minBodyExtent = 1e-4;        // m
+inline constexpr double minExtentToDistance = 1e-4;  // extent / distance from the origin
 }  // namespace limits
 
 }  // namespace sb

@@ -197,6 +197,22 @@ BodyHandle World::addBody(const BodyDef& def) {
   for (int i = 0; i < n; ++i)
     if (!def.positions[size_t(i)].allFinite())
       throw std::invalid_argument("positions[" + std::to_string(i) + "]: not finite");
+  if (n >= 2) {  // float32 must resolve the body's shape where it is (param_ranges.h)
+    Eigen::AlignedBox3d box;
+    double farthest = 0;
+    for (const Vec3& p : def.positions) {
+      box.extend(p);
+      farthest = std::max(farthest, p.norm());
+    }
+    const double extent = box.diagonal().norm();
+    if (extent < limits::minBodyExtent || extent < limits::minExtentToDistance * farthest)
+      throw std::invalid_argument(
+          "positions: the body is " + formatNumber(extent) + " m across with a particle " +
+          formatNumber(farthest) + " m from the origin; float32 positions cannot carry its shape " +
+          "(needs at least " + formatNumber(limits::minBodyExtent) + " m across and at least " +
+          formatNumber(limits::minExtentToDistance) +
+          " × its distance from the origin): scale it up or move it towards the origin");
+  }
   if (!def.masses.empty()) {
     if (int(def.masses.size()) != n)
       throw std::invalid_argument("masses: " + std::to_string(def.masses.size()) + " values for " +

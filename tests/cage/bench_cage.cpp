@@ -4,6 +4,8 @@
 #include <benchmark/benchmark.h>
 #include <omp.h>
 
+#include "sim/base/parallel.h"
+
 #include <cmath>
 #include <memory>
 #include <random>
@@ -147,7 +149,7 @@ double maxError(const sb::PointsRowMajor& out, const Eigen::Matrix<double, Eigen
 
 void BM_DeformDense(benchmark::State& state) {
   DeformSetup& s = deformSetup();
-  omp_set_num_threads(static_cast<int>(state.range(0)));
+  sb::setThreadCount(static_cast<int>(state.range(0)));
   sb::PointsRowMajor out;
   const Eigen::Matrix<float, Eigen::Dynamic, 3> cage = s.movedCage;
   for (auto _ : state) {
@@ -163,7 +165,7 @@ BENCHMARK(BM_DeformDense)->Arg(1)->Arg(2)->ArgName("threads")->UseRealTime()->Un
 
 void BM_DeformSparse(benchmark::State& state) {
   DeformSetup& s = deformSetup();
-  omp_set_num_threads(static_cast<int>(state.range(1)));
+  sb::setThreadCount(static_cast<int>(state.range(1)));
   const auto& [thr, emb] = s.sparse[static_cast<std::size_t>(state.range(0))];
   sb::PointsRowMajor out;
   const Eigen::Matrix<float, Eigen::Dynamic, 3> cage = s.movedCage;

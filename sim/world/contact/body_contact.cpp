@@ -53,6 +53,7 @@ void findContacts(const ContactBody& probe, const ContactBody& obstacle, float h
                   std::vector<Contact>& out) {
   const std::vector<mesh::Triangle>& tris = *obstacle.triangles;
   const SurfaceGrid& grid = *obstacle.grid;
+  if (grid.empty()) return;  // no triangle near any probe
   // No particle moves further relative to the obstacle than this in the sub-step: particles
   // outside the grid's bounds grown by it are skipped before any per-particle arithmetic.
   const float drift = obstacle.gridDrift;

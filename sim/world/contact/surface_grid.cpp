@@ -15,7 +15,9 @@ void SurfaceGrid::build(const std::vector<mesh::Triangle>& triangles, const floa
   bounds_.min().array() -= reach;
   bounds_.max().array() += reach;
   bounds_ = bounds_.intersection(region);
-  if (bounds_.isEmpty()) {  // no particle can ask: an empty grid
+  allTriangles_.clear();
+  if (bounds_.isEmpty() || !bounds_.sizes().allFinite()) {  // no particle can ask: an empty grid
+    bounds_.setEmpty();  // contains and intersects nothing
     dims_.setZero();
     cells_.start.assign(1, 0);
     cells_.items.clear();
@@ -39,6 +41,7 @@ void SurfaceGrid::build(const std::vector<mesh::Triangle>& triangles, const floa
     box.max().array() += reach;
     cellBoxes_[t] = box.intersects(bounds_) ? Eigen::AlignedBox3i(cellOf(box.min()), cellOf(box.max()))
                                             : Eigen::AlignedBox3i();  // empty: entered nowhere
+    if (!cellBoxes_[t].isEmpty()) allTriangles_.push_back(int(t));
   }
   buildCsr(
       dims_.prod(),
@@ -57,13 +60,16 @@ void SurfaceGrid::build(const std::vector<mesh::Triangle>& triangles, const floa
 
 Eigen::Vector3i SurfaceGrid::cellOf(const Vec3f& p) const {
   Eigen::Vector3i c;
-  for (int a = 0; a < 3; ++a)
-    c[a] = std::clamp(int(std::floor((p[a] - origin_[a]) * invCell_)), 0, dims_[a] - 1);
+  // Clamped in float first: a far or non-finite point must not overflow the int conversion.
+  for (int a = 0; a < 3; ++a) {
+    const float f = std::floor((p[a] - origin_[a]) * invCell_);
+    c[a] = !(f > 0.0f) ? 0 : f >= float(dims_[a] - 1) ? dims_[a] - 1 : int(f);
+  }
   return c;
 }
 
 SurfaceGrid::Range SurfaceGrid::candidates(const Vec3f& p) const {
-  if (!bounds_.contains(p)) return {nullptr, nullptr};
+  if (allTriangles_.empty() || !bounds_.contains(p)) return {nullptr, nullptr};
   const Eigen::Vector3i c = cellOf(p);
   const int k = cellIndex(c[0], c[1], c[2]);
   return {cells_.begin(k), cells_.end(k)};

@@ -36,6 +36,10 @@ class SurfaceGrid {
 
   // Calls visit(range) for every cell that overlaps the box p ± extra (extra ≥ 0, metres): together
   // they hold every triangle within reach() + extra of p (a triangle may come up more than once).
+  // When that box spans more than maxCellsPerLookup cells (a fast particle, a long sub-step), it
+  // visits the list of all gridded triangles once instead: a look-up never costs more than
+  // max(maxCellsPerLookup cells, one pass over the triangles), whatever the speeds. An empty
+  // grid (no triangle near the region) visits nothing.
   template <typename Visit>
   void forEachCell(const Vec3f& p, float extra, const Visit& visit) const;
 
@@ -48,6 +52,8 @@ class SurfaceGrid {
   }
 
   static constexpr int maxCellsPerAxis = 48;
+  static constexpr long long maxCellsPerLookup = 64;
+  bool empty() const { return allTriangles_.empty(); }
 
  private:
   Eigen::AlignedBox3f bounds_;
@@ -56,6 +62,7 @@ class SurfaceGrid {
   float invCell_ = 1.0f;
   Eigen::Vector3i dims_ = Eigen::Vector3i::Zero();
   Csr cells_;  // the triangles entered in each cell, ascending
+  std::vector<int> allTriangles_;  // every triangle entered in some cell, ascending
   std::vector<Eigen::AlignedBox3f> triangleBoxes_;  // per triangle, not grown
   // Scratch kept between builds so a rebuild does not allocate: each triangle's cell range.
   std::vector<Eigen::AlignedBox3i> cellBoxes_;
@@ -65,6 +72,7 @@ class SurfaceGrid {
 
 template <typename Visit>
 void SurfaceGrid::forEachCell(const Vec3f& p, float extra, const Visit& visit) const {
+  if (allTriangles_.empty()) return;  // also: bounds_ is empty, cellOf has no cell to clamp to
   if (extra <= 0.0f) {
     const Range r = candidates(p);
     if (r.begin != r.end) visit(r);
@@ -73,6 +81,11 @@ void SurfaceGrid::forEachCell(const Vec3f& p, float extra, const Visit& visit) c
   const Eigen::AlignedBox3f box(p.array() - extra, p.array() + extra);
   if (!box.intersects(bounds_)) return;
   const Eigen::Vector3i lo = cellOf(box.min()), hi = cellOf(box.max());
+  const Eigen::Vector3i span = hi - lo + Eigen::Vector3i::Ones();
+  if (1LL * span.x() * span.y() * span.z() > maxCellsPerLookup) {
+    visit(Range{allTriangles_.data(), allTriangles_.data() + allTriangles_.size()});
+    return;
+  }
   for (int k = lo.z(); k <= hi.z(); ++k)
     for (int j = lo.y(); j <= hi.y(); ++j)
       for (int i = lo.x(); i <= hi.x(); ++i) {

@@ -32,8 +32,18 @@ std::vector<std::vector<int>> gridClusters(const ClusterDef& def, const std::vec
     throw std::invalid_argument("clusters.cellSize: too small for this body (over 4M cells)");
 
   // Each particle lands in every cell whose grown box contains it: the cells within
-  // `reach` cells of its own along each axis.
-  const int reach = static_cast<int>(std::ceil(def.overlap / def.cellSize));
+  // `reach` cells of its own along each axis. overlap / cellSize can be as large as 1e12 (both
+  // accepted): in double, clamped to the grid's size before it becomes an int, so neither the
+  // conversion nor own ± reach overflows.
+  const double reachCells = std::ceil(def.overlap / def.cellSize);
+  const int reach = reachCells < 1024.0 ? static_cast<int>(reachCells) : 1024;
+  // Memberships are bounded too: each particle joins at most this many cells.
+  long long perParticle = 1;
+  for (int a = 0; a < 3; ++a) perParticle *= std::min<long long>(cells[a], 2LL * reach + 1);
+  if (perParticle * static_cast<long long>(rest.size()) > 20000000)
+    throw std::invalid_argument(
+        "clusters.overlap: too large for this cell size (each particle would join up to " +
+        std::to_string(perParticle) + " of the " + std::to_string(cellCount) + " cells)");
   std::vector<std::vector<int>> members(static_cast<size_t>(cellCount));
   auto cellIndex = [&](int i, int j, int k) { return (1LL * k * cells[1] + j) * cells[0] + i; };
   for (int p = 0; p < static_cast<int>(rest.size()); ++p) {
