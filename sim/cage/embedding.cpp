@@ -609,14 +609,16 @@ Embedding bindMeanValue(const std::vector<Vec3>& points, const TriangleMesh& cag
                              " cage vertices need " + formatBytes(std::uint64_t(denseBytes)) + ", more than the " +
                              formatBytes(options.maxWeightBytes) + " allowed; use sparse storage");
   if (denseTooBig) sparse = true;
+  // Pruned weights kept per row, estimated on up to 64 evenly spaced points (a sparse bind's
+  // size, and whether pruning pays at all).
+  std::int64_t kept = 0;
+  int samples = 0;
   if (sparse && n > 0) {
-    // Sparse: estimate the kept weights on the same kind of sample as below.
-    const int samples = std::min(n, 64);
+    samples = std::min(n, 64);
     MeanValueCage::Scratch scratch;
     std::vector<double> w(static_cast<std::size_t>(m));
     std::vector<Vec3> q(static_cast<std::size_t>(m));
     std::vector<std::pair<int, double>> row;
-    std::int64_t kept = 0;
     for (int k = 0; k < samples; ++k) {
       const Vec3& x = points[static_cast<std::size_t>(static_cast<std::int64_t>(k) * n / samples)];
       if (!prepared.weights(x, w.data(), scratch)) continue;
@@ -632,21 +634,8 @@ Embedding bindMeanValue(const std::vector<Vec3>& points, const TriangleMesh& cag
                                " allowed (BindOptions::maxWeightBytes)");
   }
   if (sparse && options.storage == WeightStorage::Auto && n > 0 && !denseTooBig) {
-    // Auto: decide on a sample of up to 64 evenly spaced points whether pruning keeps at most
-    // half of the entries; otherwise store dense and unpruned.
-    const int samples = std::min(n, 64);
-    MeanValueCage::Scratch scratch;
-    std::vector<double> w(static_cast<std::size_t>(m));
-    std::vector<Vec3> q(static_cast<std::size_t>(m));
-    std::vector<std::pair<int, double>> row;
-    std::int64_t kept = 0;
-    for (int k = 0; k < samples; ++k) {
-      const Vec3& x = points[static_cast<std::size_t>(static_cast<std::int64_t>(k) * n / samples)];
-      if (!prepared.weights(x, w.data(), scratch)) continue;
-      for (int j = 0; j < m; ++j) q[j] = (cage.vertices[j] - x) / L;
-      pruneRow(row, w.data(), m, q, options.pruneThreshold);
-      kept += static_cast<std::int64_t>(row.size());
-    }
+    // Auto: sparse only when pruning keeps at most half of the entries; otherwise store dense
+    // and unpruned.
     sparse = 2 * kept <= static_cast<std::int64_t>(samples) * m;
   }
 
