@@ -10,27 +10,15 @@
 #include <stdexcept>
 
 #include "sim/base/file_io.h"
+#include "tests/support/temp_dir_test.h"
 
 namespace sb {
 namespace {
 
 namespace fs = std::filesystem;
 
-class FileIo : public ::testing::Test {
+class FileIo : public sb::test_support::TempDirTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("softbody_file_io_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  static std::string contents(const std::string& p) {
-    std::ifstream in(p, std::ios::binary);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-  }
   // Files in the folder other than `keep` (a temporary file left behind would show up here).
   int othersThan(const std::string& keep) const {
     int n = 0;
@@ -38,7 +26,6 @@ class FileIo : public ::testing::Test {
       if (e.path().filename() != keep) ++n;
     return n;
   }
-  fs::path dir_;
 };
 
 TEST_F(FileIo, AtomicWriteReplacesTheFileWhole) {

@@ -12,6 +12,7 @@
 
 #include "sim/cage/embedding.h"
 #include "tests/mesh/mesh_fixtures.h"
+#include "tests/support/temp_dir_test.h"
 
 namespace sb::cage {
 namespace {
@@ -19,20 +20,16 @@ namespace {
 namespace fs = std::filesystem;
 using Vec3 = Eigen::Vector3d;
 
-class BindChecks : public ::testing::Test {
+class BindChecks : public sb::test_support::TempDirTest {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("sb_bind_checks_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    TempDirTest::SetUp();
     cage_ = mesh::testing::makeBox(1, 1, 1);
     for (int i = 0; i < 20; ++i) points_.emplace_back(0.1 + 0.04 * i, 0.3 + 0.01 * i, 0.7 - 0.02 * i);
     options_.cacheDir = dir_.string();
     options_.storage = WeightStorage::Dense;
     options_.warning = [this](const std::string& w) { warnings_.push_back(w); };
   }
-  void TearDown() override { fs::remove_all(dir_); }
   std::string cacheFile() const { return bindCachePath(dir_.string(), bindCacheKey(points_, cage_, options_)); }
   std::string read(const std::string& p) const {
     std::ifstream f(p, std::ios::binary);
@@ -48,7 +45,6 @@ class BindChecks : public ::testing::Test {
   // rows × cols weights, checksum (all 8-byte fields).
   static constexpr size_t kStats = 8 * 8, kWeights = kStats + 15 * 8;
 
-  fs::path dir_;
   mesh::TriangleMesh cage_;
   std::vector<Vec3> points_;
   BindOptions options_;

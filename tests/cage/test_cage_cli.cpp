@@ -15,6 +15,7 @@
 #include "sim/cage/embedding.h"
 #include "sim/mesh/mesh_io.h"
 #include "tests/mesh/mesh_fixtures.h"
+#include "tests/support/temp_dir_test.h"
 
 namespace sb::cage {
 using namespace sb::mesh;  // meshes, mesh files, surfaces
@@ -28,33 +29,18 @@ struct ProcessResult {
   std::string out, err;
 };
 
-class Cli : public ::testing::Test {
+class Cli : public sb::test_support::TempDirTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("sb_cage_cli_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& n) const { return (dir_ / n).string(); }
-  static std::string slurp(const std::string& p) {
-    std::ifstream f(p);
-    std::stringstream s;
-    s << f.rdbuf();
-    return s.str();
-  }
   ProcessResult run(const std::string& args) const {
     const std::string cmd = std::string("'") + SOFTBODY_EXE + "' " + args + " > '" + path("stdout.txt") + "' 2> '" +
                             path("stderr.txt") + "'";
     const int status = std::system(cmd.c_str());
     ProcessResult r;
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = slurp(path("stdout.txt"));
-    r.err = slurp(path("stderr.txt"));
+    r.out = contents(path("stdout.txt"));
+    r.err = contents(path("stderr.txt"));
     return r;
   }
-  fs::path dir_;
 };
 
 const std::string kMeshDir = SOFTBODY_TEST_MESH_DIR;

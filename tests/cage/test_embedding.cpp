@@ -18,6 +18,7 @@
 #include "sim/mesh/mesh_io.h"
 #include "sim/mesh/normals.h"
 #include "tests/mesh/mesh_fixtures.h"
+#include "tests/support/temp_dir_test.h"
 
 namespace sb::cage {
 using namespace sb::mesh;  // meshes, mesh files, surfaces
@@ -237,21 +238,13 @@ TEST(Bind, DeformWorksOnStridedViews) {
 // ---------------------------------------------------------------------------------------------
 // Save / load / cache
 
-class CacheTest : public ::testing::Test {
+class CacheTest : public sb::test_support::TempDirTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("sb_cage_cache_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
   std::vector<fs::path> files() const {
     std::vector<fs::path> f;
     for (const auto& e : fs::directory_iterator(dir_)) f.push_back(e.path());
     return f;
   }
-  fs::path dir_;
 };
 
 TEST_F(CacheTest, SaveLoadRoundTrip) {

@@ -15,101 +15,19 @@
 #include "sim/mesh/mesh_io.h"
 #include "sim/scene/frame_export.h"
 #include "sim/scene/scene.h"
+#include "tests/mesh/mesh_file_bytes.h"
 
 namespace fs = std::filesystem;
 using sb::mesh::TriangleMesh;
+using namespace sb::mesh::testing;
 
 namespace {
 
 const std::string kAssets = SOFTBODY_ASSET_DIR;
 
-template <typename T>
-void put(std::string& s, T v, bool big) {
-  unsigned char b[sizeof(T)];
-  std::memcpy(b, &v, sizeof(T));
-  if (big) std::reverse(b, b + sizeof(T));
-  s.append(reinterpret_cast<const char*>(b), sizeof(T));
-}
-
 void write(const fs::path& p, const std::string& bytes) {
   fs::create_directories(p.parent_path());
   std::ofstream(p, std::ios::binary) << bytes;
-}
-
-std::string offAscii(const TriangleMesh& m) {
-  std::ostringstream f;
-  f.precision(9);
-  f << "OFF\n# seed\n" << m.vertices.size() << " " << m.triangles.size() << " 0\n";
-  for (const auto& v : m.vertices) f << v.x() << " " << v.y() << " " << v.z() << "\n";
-  for (const auto& t : m.triangles) f << "3 " << t[0] << " " << t[1] << " " << t[2] << "\n";
-  return f.str();
-}
-
-std::string offBinary(const TriangleMesh& m) {
-  std::string s = "OFF BINARY\n";
-  put<std::int32_t>(s, int(m.vertices.size()), true);
-  put<std::int32_t>(s, int(m.triangles.size()), true);
-  put<std::int32_t>(s, 0, true);
-  for (const auto& v : m.vertices)
-    for (int a = 0; a < 3; ++a) put<float>(s, float(v[a]), true);
-  for (const auto& t : m.triangles) {
-    put<std::int32_t>(s, 3, true);
-    for (int i : t) put<std::int32_t>(s, i, true);
-    put<std::int32_t>(s, 0, true);
-  }
-  return s;
-}
-
-std::string plyHeader(const char* format, const TriangleMesh& m) {
-  return std::string("ply\nformat ") + format + " 1.0\ncomment seed\nelement vertex " +
-         std::to_string(m.vertices.size()) + "\nproperty float x\nproperty float y\nproperty float z\n" +
-         "element face " + std::to_string(m.triangles.size()) +
-         "\nproperty list uchar int vertex_indices\nend_header\n";
-}
-
-std::string plyAscii(const TriangleMesh& m) {
-  std::ostringstream f;
-  f.precision(9);
-  f << plyHeader("ascii", m);
-  for (const auto& v : m.vertices) f << v.x() << " " << v.y() << " " << v.z() << "\n";
-  for (const auto& t : m.triangles) f << "3 " << t[0] << " " << t[1] << " " << t[2] << "\n";
-  return f.str();
-}
-
-std::string plyBinary(const TriangleMesh& m, bool big) {
-  std::string s = plyHeader(big ? "binary_big_endian" : "binary_little_endian", m);
-  for (const auto& v : m.vertices)
-    for (int a = 0; a < 3; ++a) put<float>(s, float(v[a]), big);
-  for (const auto& t : m.triangles) {
-    put<std::uint8_t>(s, 3, big);
-    for (int i : t) put<std::int32_t>(s, i, big);
-  }
-  return s;
-}
-
-std::string stlAscii(const TriangleMesh& m) {
-  std::ostringstream f;
-  f.precision(9);
-  f << "solid seed\n";
-  for (const auto& t : m.triangles) {
-    f << " facet normal 0 0 1\n  outer loop\n";
-    for (int i : t) f << "   vertex " << m.vertices[size_t(i)].x() << " " << m.vertices[size_t(i)].y() << " " << m.vertices[size_t(i)].z() << "\n";
-    f << "  endloop\n endfacet\n";
-  }
-  f << "endsolid seed\n";
-  return f.str();
-}
-
-std::string stlBinary(const TriangleMesh& m) {
-  std::string s(80, ' ');
-  put<std::uint32_t>(s, std::uint32_t(m.triangles.size()), false);
-  for (const auto& t : m.triangles) {
-    for (int a = 0; a < 3; ++a) put<float>(s, 0.0f, false);
-    for (int i : t)
-      for (int a = 0; a < 3; ++a) put<float>(s, float(m.vertices[size_t(i)][a]), false);
-    put<std::uint16_t>(s, 0, false);
-  }
-  return s;
 }
 
 std::string readAll(const fs::path& p) {

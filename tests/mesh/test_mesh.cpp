@@ -13,6 +13,7 @@
 #include "sim/mesh/closed_surface.h"
 #include "sim/mesh/mesh_io.h"
 #include "tests/mesh/mesh_fixtures.h"
+#include "tests/support/temp_dir_test.h"
 
 namespace sb::mesh {
 namespace {
@@ -20,22 +21,7 @@ namespace {
 namespace fs = std::filesystem;
 using Vec3 = Eigen::Vector3d;
 
-class TempDir : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("sb_cage_io_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  void write(const std::string& name, const std::string& text) const {
-    std::ofstream(path(name)) << text;
-  }
-  fs::path dir_;
-};
-
-using MeshIo = TempDir;
+using MeshIo = sb::test_support::TempDirTest;
 
 // Checks that b has the same triangles as a up to a vertex renumbering by position.
 void expectSameSurface(const TriangleMesh& a, const TriangleMesh& b, double tol) {

@@ -13,13 +13,16 @@
 
 #include "sim/mesh/closed_surface.h"
 #include "sim/mesh/mesh_io.h"
+#include "tests/mesh/mesh_file_bytes.h"
 #include "tests/mesh/mesh_fixtures.h"
+#include "tests/support/temp_dir_test.h"
 
 namespace sb::mesh {
 namespace {
 
 namespace fs = std::filesystem;
 using Vec3 = Eigen::Vector3d;
+using namespace sb::mesh::testing;  // the file encoders
 
 // The message of parsing `bytes`, or "" when it parses.
 std::string errorOf(const std::string& bytes, MeshFormat format) {
@@ -40,89 +43,6 @@ std::string errorOf(const std::string& bytes, MeshFormat format) {
 const TriangleMesh& cube() {
   static const TriangleMesh c = testing::makeBox(1, 1, 1, Vec3(2, 1, 0.5), Vec3(-1, 0.25, 3));
   return c;
-}
-
-template <typename T>
-void put(std::string& s, T v, bool big) {
-  unsigned char b[sizeof(T)];
-  std::memcpy(b, &v, sizeof(T));
-  if (big) std::reverse(b, b + sizeof(T));
-  s.append(reinterpret_cast<const char*>(b), sizeof(T));
-}
-
-std::string offAscii(const TriangleMesh& m) {
-  std::ostringstream f;
-  f.precision(17);
-  f << "OFF\n" << m.vertices.size() << " " << m.triangles.size() << " 0\n";
-  for (const auto& v : m.vertices) f << v.x() << " " << v.y() << " " << v.z() << "\n";
-  for (const auto& t : m.triangles) f << "3 " << t[0] << " " << t[1] << " " << t[2] << "\n";
-  return f.str();
-}
-
-std::string offBinary(const TriangleMesh& m) {
-  std::string s = "OFF BINARY\n";
-  put<std::int32_t>(s, int(m.vertices.size()), true);
-  put<std::int32_t>(s, int(m.triangles.size()), true);
-  put<std::int32_t>(s, 0, true);
-  for (const auto& v : m.vertices)
-    for (int a = 0; a < 3; ++a) put<float>(s, float(v[a]), true);
-  for (const auto& t : m.triangles) {
-    put<std::int32_t>(s, 3, true);
-    for (int i : t) put<std::int32_t>(s, i, true);
-    put<std::int32_t>(s, 0, true);
-  }
-  return s;
-}
-
-std::string plyHeader(const char* format, size_t nv, size_t nf) {
-  return std::string("ply\nformat ") + format + " 1.0\ncomment test\nelement vertex " + std::to_string(nv) +
-         "\nproperty float x\nproperty float y\nproperty float z\nelement face " + std::to_string(nf) +
-         "\nproperty list uchar int vertex_indices\nend_header\n";
-}
-
-std::string plyAscii(const TriangleMesh& m) {
-  std::ostringstream f;
-  f.precision(9);
-  f << plyHeader("ascii", m.vertices.size(), m.triangles.size());
-  for (const auto& v : m.vertices) f << v.x() << " " << v.y() << " " << v.z() << "\n";
-  for (const auto& t : m.triangles) f << "3 " << t[0] << " " << t[1] << " " << t[2] << "\n";
-  return f.str();
-}
-
-std::string plyBinary(const TriangleMesh& m, bool big) {
-  std::string s = plyHeader(big ? "binary_big_endian" : "binary_little_endian", m.vertices.size(), m.triangles.size());
-  for (const auto& v : m.vertices)
-    for (int a = 0; a < 3; ++a) put<float>(s, float(v[a]), big);
-  for (const auto& t : m.triangles) {
-    put<std::uint8_t>(s, 3, big);
-    for (int i : t) put<std::int32_t>(s, i, big);
-  }
-  return s;
-}
-
-std::string stlBinary(const TriangleMesh& m) {
-  std::string s(80, ' ');
-  put<std::uint32_t>(s, std::uint32_t(m.triangles.size()), false);
-  for (const auto& t : m.triangles) {
-    for (int a = 0; a < 3; ++a) put<float>(s, 0.0f, false);
-    for (int i : t)
-      for (int a = 0; a < 3; ++a) put<float>(s, float(m.vertices[size_t(i)][a]), false);
-    put<std::uint16_t>(s, 0, false);
-  }
-  return s;
-}
-
-std::string stlAscii(const std::vector<std::array<Vec3, 3>>& facets) {
-  std::ostringstream f;
-  f.precision(17);
-  f << "solid t\n";
-  for (const auto& t : facets) {
-    f << "facet normal 0 0 1\nouter loop\n";
-    for (const Vec3& v : t) f << "vertex " << v.x() << " " << v.y() << " " << v.z() << "\n";
-    f << "endloop\nendfacet\n";
-  }
-  f << "endsolid t\n";
-  return f.str();
 }
 
 void expectCube(const TriangleMesh& r) {
@@ -295,16 +215,7 @@ TEST(MeshReaders, ByteFlipsNeverCrash) {
   EXPECT_GT(refused, 0);
 }
 
-class MeshReaderFiles : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("sb_mesh_readers_" + std::to_string(::getpid()));
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  fs::path dir_;
-};
+using MeshReaderFiles = sb::test_support::TempDirTest;
 
 TEST_F(MeshReaderFiles, NonRegularFilesAreRefusedAtOnce) {
   const std::string fifo = path("fifo.obj");

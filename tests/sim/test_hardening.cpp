@@ -17,6 +17,7 @@
 #include "sim/scene/scene.h"
 #include "sim/world/contact/surface_grid.h"
 #include "tests/sim/test_util.h"
+#include "tests/support/temp_dir_test.h"
 
 namespace sb {
 namespace {
@@ -194,15 +195,8 @@ TEST(Hardening, DuplicateKeysAreRefused) {
 // ---------------------------------------------------------------------------------------------
 // 9. Non-regular paths
 
-class HardeningFiles : public ::testing::Test {
+class HardeningFiles : public sb::test_support::TempDirTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("sb_hardening_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
   static std::string loadError(const std::string& p) {
     try {
       loadScene(p);
@@ -211,7 +205,6 @@ class HardeningFiles : public ::testing::Test {
     }
     return "";
   }
-  fs::path dir_;
 };
 
 TEST_F(HardeningFiles, ScenePathsThatAreNotRegularFiles) {
