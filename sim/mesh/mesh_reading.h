@@ -1,0 +1,162 @@
+// Shared pieces of the mesh readers (sim/mesh/*_reader.cpp): line and token splitting, number
+// parsing with the readers' rules, coordinate checks, byte-order readers. Private to sim/mesh:
+// the public interface is sim/mesh/mesh_io.h. A reader reports a broken file by fail(reason),
+// which parseMesh turns into a MeshError naming the file.
+#pragma once
+
+#include <algorithm>
+#include <cfloat>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "sim/mesh/triangle_mesh.h"
+
+namespace sb::mesh::reading {
+
+using std::string_view;
+
+// Thrown inside the parsers; readMesh/parseMesh prefix the name.
+struct ParseFail {
+  std::string reason;
+};
+[[noreturn]] inline void fail(const std::string& reason) { throw ParseFail{reason}; }
+inline std::string lineText(int line) { return "line " + std::to_string(line) + ": "; }
+
+inline std::string numberText(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+
+// A coordinate every part of the program can hold: finite and within float range.
+inline void checkCoordinate(double c, const std::string& where) {
+  if (!std::isfinite(c)) fail(where + "coordinate " + numberText(c) + " is not finite");
+  if (std::abs(c) > double(FLT_MAX))
+    fail(where + "coordinate " + numberText(c) + " is beyond float range (|c| ≤ 3.4e38)");
+}
+
+inline bool isSpace(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
+
+// Splits text into lines ('\n'; a trailing '\r' is dropped with the other blanks).
+class Lines {
+ public:
+  explicit Lines(string_view text, size_t start = 0) : text_(text), pos_(start) {}
+  bool next(string_view& line) {
+    if (pos_ >= text_.size()) return false;
+    const size_t end = text_.find('\n', pos_);
+    const size_t stop = end == string_view::npos ? text_.size() : end;
+    line = text_.substr(pos_, stop - pos_);
+    pos_ = end == string_view::npos ? text_.size() : end + 1;
+    ++number_;
+    return true;
+  }
+  int number() const { return number_; }
+  size_t position() const { return pos_; }
+
+ private:
+  string_view text_;
+  size_t pos_;
+  int number_ = 0;
+};
+
+// Whitespace-separated tokens of one line (or of a whole text).
+class Tokens {
+ public:
+  explicit Tokens(string_view text) : text_(text) {}
+  bool next(string_view& token) {
+    while (pos_ < text_.size() && (isSpace(text_[pos_]) || text_[pos_] == '\n')) ++pos_;
+    if (pos_ >= text_.size()) return false;
+    const size_t start = pos_;
+    while (pos_ < text_.size() && !isSpace(text_[pos_]) && text_[pos_] != '\n') ++pos_;
+    token = text_.substr(start, pos_ - start);
+    return true;
+  }
+  bool empty() {
+    size_t p = pos_;
+    while (p < text_.size() && (isSpace(text_[p]) || text_[p] == '\n')) ++p;
+    return p >= text_.size();
+  }
+
+ private:
+  string_view text_;
+  size_t pos_ = 0;
+};
+
+inline std::string quoted(string_view token) {
+  std::string t(token.substr(0, 40));
+  for (char& c : t)
+    if (static_cast<unsigned char>(c) < 32 || static_cast<unsigned char>(c) > 126) c = '?';
+  return "'" + t + (token.size() > 40 ? "...'" : "'");
+}
+
+inline bool parseDouble(string_view token, double& out) {
+  if (!token.empty() && token[0] == '+') token.remove_prefix(1);
+  if (token.empty()) return false;
+  const auto r = std::from_chars(token.data(), token.data() + token.size(), out);
+  if (r.ec == std::errc::result_out_of_range) {
+    out = token[0] == '-' ? -std::numeric_limits<double>::infinity()
+                          : std::numeric_limits<double>::infinity();
+    return r.ptr == token.data() + token.size();
+  }
+  return r.ec == std::errc() && r.ptr == token.data() + token.size();
+}
+
+inline bool parseInteger(string_view token, long long& out) {
+  if (!token.empty() && token[0] == '+') token.remove_prefix(1);
+  if (token.empty()) return false;
+  const auto r = std::from_chars(token.data(), token.data() + token.size(), out);
+  return r.ec == std::errc() && r.ptr == token.data() + token.size();
+}
+
+// A count from a header: 0 ≤ n ≤ INT32_MAX.
+inline int parseCount(string_view token, const std::string& what) {
+  long long n = 0;
+  if (!parseInteger(token, n)) fail(what + " must be a whole number, got " + quoted(token));
+  if (n < 0 || n > std::numeric_limits<int>::max())
+    fail(what + " " + std::string(token) + " is out of range");
+  return int(n);
+}
+
+inline void addFace(TriangleMesh& mesh, const std::vector<int>& face) {
+  for (size_t k = 1; k + 1 < face.size(); ++k) mesh.triangles.push_back({face[0], face[k], face[k + 1]});
+}
+
+// Big-endian / little-endian readers over the remaining bytes.
+class Bytes {
+ public:
+  Bytes(string_view data, size_t pos, bool bigEndian) : d_(data), pos_(pos), big_(bigEndian) {}
+  size_t left() const { return d_.size() - pos_; }
+  size_t position() const { return pos_; }
+  template <typename T>
+  T get(const char* what) {
+    if (left() < sizeof(T)) fail(std::string("the file ends inside ") + what);
+    unsigned char b[sizeof(T)];
+    std::memcpy(b, d_.data() + pos_, sizeof(T));
+    pos_ += sizeof(T);
+    const bool hostLittle = true;  // x86-64 and every target the project builds for
+    if (big_ == hostLittle) std::reverse(b, b + sizeof(T));
+    T v;
+    std::memcpy(&v, b, sizeof(T));
+    return v;
+  }
+
+ private:
+  string_view d_;
+  size_t pos_;
+  bool big_;
+};
+
+// The readers: each parses a whole file's bytes (formats and rules in sim/mesh/mesh_io.h).
+TriangleMesh parseObj(string_view text);
+TriangleMesh parseOff(string_view text);
+TriangleMesh parsePly(string_view text);
+TriangleMesh parseStl(string_view text);
+
+}  // namespace sb::mesh::reading
