@@ -67,6 +67,11 @@ struct BodyParams {
   // rigid motion is only what its pins allow, so its swing is damped); free rigid motion is
   // never damped.
   double damping = 0.0;
+  // Restitution e in [0, 1]: the normal speed a contact gives back, relative to the approach,
+  // for impacts faster than WorldSettings::restitutionThreshold. A contact uses the larger of
+  // its two sides' (the other body's or the collider's), as Box2D. 0: impacts are inelastic,
+  // and the deformation a soft body stores on impact is not thrown back at the ground.
+  double restitution = 0.0;
   PlasticityParams plasticity;
 };
 
