@@ -1,4 +1,4 @@
-// The Sleep phase (docs/design.md §3, §5.6): bodies at rest fall asleep, island by island, and
+// The Sleep phase (docs/design.md §3, §5.5): bodies at rest fall asleep, island by island, and
 // whatever wakes one wakes its island.
 //
 // Each awake body counts how long every one of its particles has been slower than its sleep
