@@ -145,13 +145,12 @@ bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle,
                             bestNormal = n;
                           }
                         });
-      if (bestPlane > kNoPlane) {
-        // The gap it may close along that normal is at most the true distance: on a convex
-        // surface no face plane is farther than the closest point, but in a concave crease one
-        // can be far farther (a particle 1 mm off a crease of a neighbour was let approach 3 cm,
-        // fell in, was pushed out, and buzzed at 0.24 m/s for ever).
-        out.push_back({i, best.triangle, best.point.weights, bestNormal,
-                       std::min(bestPlane, distance)});
+      // Only where the surface is convex around the closest point: there no face plane is
+      // farther than the closest point. In a concave crease one can be far farther (a particle
+      // 1 mm off a neighbour's crease was let approach 3 cm along it, fell in, was pushed out,
+      // and buzzed at 0.24 m/s for ever): there the direction to the closest point is used.
+      if (bestPlane > kNoPlane && bestPlane <= distance) {
+        out.push_back({i, best.triangle, best.point.weights, bestNormal, bestPlane});
         continue;
       }
     } else if (!deepHit) {
