@@ -676,7 +676,7 @@ int sceneRun() {
   const double T = num("T", 20);
   const int steps = stepsFor(w, T);
   double lastAwake = 0, peak = 0, peakLate = 0, lastImpact = 0, asleepAt = -1;
-  const int every = std::max(1, steps / 10);
+  const int every = std::max(1, int(num("every", steps / 10)));
   const int n = int(w.bodies().size());
   std::vector<double> prevVy(size_t(n), 0.0);
   const double cpu0 = cpuSeconds();
@@ -696,8 +696,26 @@ int sceneRun() {
     const int sleeping = sleepingCount(w);
     if (sleeping == n && asleepAt < 0) asleepAt = w.time();
     if (sleeping < n) asleepAt = -1;
-    if (k % every == 0)
-      std::printf("%6.2f maxSpeed %.4g KE %.4g sleeping %d\n", w.time(), v, kinetic(w), sleeping);
+    if (k % every == 0) {
+      std::printf("%6.2f maxSpeed %.4g KE %.4g sleeping %d", w.time(), v, kinetic(w), sleeping);
+      if (num("who", 0) > 0) {  // the fastest body: name, mode, α, centre velocity and height
+        size_t f = 0;
+        double fv = -1;
+        for (size_t i = 0; i < bs.size(); ++i) {
+          const double bv = w.velocities(bs[i]).rowwise().norm().maxCoeff();
+          if (bv > fv) {
+            fv = bv;
+            f = i;
+          }
+        }
+        const Vec3 vc = w.linearMomentum(bs[f]) / w.mass(bs[f]);
+        const Vec3 c = w.centreOfMass(bs[f]);
+        std::printf("  fastest %s (%s α %.2f) v_c (%.3f %.3f %.3f) c (%.3f %.3f %.3f)",
+                    w.name(bs[f]).c_str(), modeName(w.params(bs[f]).mode), w.params(bs[f]).alpha,
+                    vc.x(), vc.y(), vc.z(), c.x(), c.y(), c.z());
+      }
+      std::printf("\n");
+    }
   }
   std::printf(
       "peak %.3g m/s; fastest in the last 5 s %.3g m/s; last time >= 1 cm/s: %.2f s; last impact "
