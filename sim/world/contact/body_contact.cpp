@@ -112,8 +112,19 @@ bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle,
       // Nothing in reach, inside the obstacle's box: the closest triangle of the whole surface,
       // kept only if the particle is inside (a particle deeper than one sub-step's travel: an
       // overlapping start or a drag into the body).
+      // Triangles whose (build-time) boxes are farther than the best so far plus the grid's
+      // drift cannot be closer (as in the grid lookup above): most of the surface is skipped
+      // for the price of a box distance. (An empty grid kept no boxes: every triangle then.)
       best.distanceSquared = std::numeric_limits<float>::infinity();
-      for (int t = 0; t < int(tris.size()); ++t) consider(obstacle, p, t, best);
+      float deepBound = best.distanceSquared;
+      const bool haveBoxes = !grid.empty();
+      for (int t = 0; t < int(tris.size()); ++t) {
+        if (haveBoxes && grid.boxDistanceSquared(t, p) > deepBound) continue;
+        if (consider(obstacle, p, t, best)) {
+          const float d = std::sqrt(best.distanceSquared);
+          deepBound = drift > 0.0f ? (d + drift) * (d + drift) : best.distanceSquared;
+        }
+      }
       if (best.triangle < 0) continue;
       deepHit = true;
     }
