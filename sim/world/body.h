@@ -83,6 +83,9 @@ struct BodyModel {
   mesh::SurfaceTopology surfaceTopology;
   float spacing = 0;
   Eigen::VectorXf contactInvMass;
+  // Sleep: the body may sleep once every particle has been slower than this for a while (m/s;
+  // scaled to its size, world.cpp).
+  float sleepSpeed = 0;
 
   int clusterCount() const { return static_cast<int>(clusterRest.size()); }
   int particleCount() const { return static_cast<int>(rest.rows()); }
@@ -113,6 +116,16 @@ struct BodyState {
 // Start positions and velocities, identity plastic state, goals = the rest shape.
 void resetBodyState(const BodyModel& model, BodyState& state);
 
+// Whether a body sleeps (WorldSettings::sleep): written by the Sleep phase, which puts islands
+// of bodies at rest to sleep, and by everything that wakes them (contact with an awake body,
+// drags, forces, parameter, collider and setting changes). A sleeping body skips every phase;
+// it stays an obstacle for awake bodies.
+struct SleepState {
+  bool asleep = false;
+  double still = 0;  // seconds every particle has been slower than model.sleepSpeed
+  int island = -1;   // bodies that fell asleep together (one island) wake together
+};
+
 // One entry of the World's body table; handles refer to it by index and generation.
 struct BodySlot {
   std::uint32_t generation = 0;
@@ -120,6 +133,7 @@ struct BodySlot {
   std::shared_ptr<const BodyModel> model;
   BodyParams params;
   BodyState state;
+  SleepState sleep;
 };
 
 }  // namespace sb

@@ -67,6 +67,14 @@ struct BodyParams {
   // rigid motion is only what its pins allow, so its swing is damped); free rigid motion is
   // never damped.
   double damping = 0.0;
+  // Restitution e in [0, 1]: the normal speed a contact gives back, relative to the approach,
+  // for impacts faster than WorldSettings::restitutionThreshold. A contact uses the larger of
+  // its two sides' (the other body's or the collider's), as Box2D. 0: impacts are inelastic.
+  // Rigid bodies rebound e² of their fall height (± 0.03); soft bodies (α < 1) do not follow e
+  // yet: the bounce acts on the touching particles, which shape matching pulls back, and part
+  // of the deformation stored on impact springs back whatever e is (a linear α 0.6 body
+  // rebounds 0.05 of its fall for e = 0, 0.02 for e = 0.5; docs/design.md §5.5).
+  double restitution = 0.0;
   PlasticityParams plasticity;
 };
 

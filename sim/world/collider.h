@@ -23,6 +23,9 @@ struct Collider {
   // Friction coefficient μ ≥ 0: tangential speed lost per contact, relative to the normal
   // speed removed; a large μ makes contact sticky.
   double friction = 0.5;
+  // Restitution e in [0, 1] (as BodyParams::restitution; a contact uses the larger of the
+  // collider's and the body's).
+  double restitution = 0.0;
 
   static Collider plane(const Vec3& normal, double offset, double friction = 0.5);
   static Collider box(const Vec3& centre, const Vec3& halfExtents, const Mat3& rotation,

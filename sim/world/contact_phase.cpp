@@ -9,51 +9,89 @@ namespace sb {
 
 namespace {
 
-// Per-body work (bounds, grids, pairs, static contacts) forks only in worlds with at least this
-// many particles.
+// Per-body work (bounds, grids, pairs, static contacts, islands) forks only in worlds with at
+// least this many particles.
 constexpr long long kMinParallelBodyWork = 2048;
 // Separation body–body contacts restore, as a fraction of the obstacle's surface spacing: a
 // small positive gap keeps resting particles outside despite float round-off.
 constexpr float kContactGap = 0.01f;
+// Contacts are made this far beyond the gap (spacings of the obstacle; for colliders, of the
+// body) plus the sub-step's travel: the solve lets them approach until they touch, so resting
+// contacts persist from sub-step to sub-step (and warm start) and nothing tunnels.
+constexpr float kContactMargin = 0.25f;
 // An obstacle's contact grid is rebuilt once its surface has moved this many spacings.
 constexpr float kGridSlack = 0.25f;
-// Gauss–Seidel sweeps over a sub-step's contacts.
-constexpr int kContactSweeps = 4;
+// Sub-steps between whole-surface searches for deep particles (overlapping starts, drags into
+// another body); pairs that found some are searched every sub-step until they find none.
+constexpr int kDeepSearchEvery = 8;
 
-// Sets up the contact view of the body in slot s.
-void prepareContactBody(BodySlot& b, ContactScratch::Body& cs) {
+bool lessKey(const ContactScratch::Warm& a, const ContactScratch::Warm& b) {
+  return a.key < b.key;
+}
+
+// Sets up the detection view of the body in slot s.
+void prepareGeometry(const BodySlot& b, ContactScratch::Body& cs) {
   const BodyModel& m = *b.model;
-  ContactBody& view = cs.view;
+  ContactGeometry& g = cs.geometry;
   for (int a = 0; a < 3; ++a) {
-    view.x[a] = b.state.x.col(a).data();
-    view.v[a] = b.state.v.col(a).data();
+    g.x[a] = b.state.x.col(a).data();
+    g.v[a] = b.state.v.col(a).data();
   }
-  view.mass = m.mass.data();
-  view.invMass = m.contactInvMass.data();
-  view.count = m.particleCount();
-  view.triangles = &m.surface;
-  view.topology = &m.surfaceTopology;
-  view.grid = &cs.grid;
-  view.gap = kContactGap * m.spacing;
-  view.meanVelocity = cs.meanVelocity;
-  view.maxRelativeSpeed = cs.maxRelativeSpeed;
-  // A stiff body answers a contact mostly as a whole (see sim/body_contact.h); one held by
-  // pinned particles cannot move as a whole.
-  prepareRigidResponse(view, m.pinned.empty() ? float(b.params.alpha) : 0.0f);
+  g.count = m.particleCount();
+  g.triangles = &m.surface;
+  g.topology = &m.surfaceTopology;
+  g.grid = &cs.grid;
+  g.box = cs.box;
+  g.gap = kContactGap * m.spacing;
+  g.margin = kContactMargin * m.spacing;
+  g.meanVelocity = cs.meanVelocity;
+  g.maxRelativeSpeed = cs.maxRelativeSpeed;
+}
+
+// Sets up the solve's view of the body in slot s.
+void prepareBody(BodySlot& b, SolverBody& sb) {
+  const BodyModel& m = *b.model;
+  for (int a = 0; a < 3; ++a) {
+    sb.x[a] = b.state.x.col(a).data();
+    sb.v[a] = b.state.v.col(a).data();
+  }
+  sb.mass = m.mass.data();
+  sb.invMass = m.contactInvMass.data();
+  sb.count = m.particleCount();
+  sb.triangles = &m.surface;
+  sb.gap = kContactGap * m.spacing;
+  sb.spacing = m.spacing;
+  sb.totalMass = float(m.totalMass);
+  // A stiff body answers a contact mostly as a whole (contact_solver.h): shape matching couples
+  // a particle to its body by α per sub-step. One held by pinned particles cannot move as a
+  // whole.
+  sb.rigidShare = m.pinned.empty() ? float(b.params.alpha) : 0.0f;
+  sb.recoveryShare = m.pinned.empty() ? 1.0f : 0.0f;
+  sb.immovable = b.sleep.asleep;
+  prepareSolverBody(sb);
+}
+
+int findRoot(std::vector<int>& parent, int i) {
+  while (parent[size_t(i)] != i) {
+    parent[size_t(i)] = parent[size_t(parent[size_t(i)])];
+    i = parent[size_t(i)];
+  }
+  return i;
 }
 
 }  // namespace
 
-int runContactsPhase(const WorkLayout& layout, const ContactSettings& settings, double h,
-                     std::vector<BodySlot>& slots, const std::vector<int>& order,
-                     ContactScratch& scratch) {
-  if (!settings.bodyContact || order.size() < 2) return 0;
+void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings, double h,
+                      std::vector<BodySlot>& slots, const std::vector<int>& order,
+                      const std::vector<Collider>& colliders, ContactScratch& scratch) {
   std::vector<ContactScratch::Body>& contactScratch = scratch.bodies;
   contactScratch.resize(slots.size());
+  scratch.pairs.clear();
+  scratch.wake.clear();
+  ++scratch.substeps;
   const int minParallel = layout.particles >= kMinParallelBodyWork ? 2 : INT32_MAX;
   // Bounds and speeds of every body (serial: a light pass, not worth a fork/join).
-  for (int k = 0; k < static_cast<int>(order.size()); ++k) {
-    const int s = order[size_t(k)];
+  for (int s : order) {
     const BodyState& st = slots[size_t(s)].state;
     ContactScratch::Body& cs = contactScratch[size_t(s)];
     const BodyModel& m = *slots[size_t(s)].model;
@@ -73,17 +111,41 @@ int runContactsPhase(const WorkLayout& layout, const ContactSettings& settings, 
     cs.maxRelativeSpeed = std::sqrt(relative2);
     cs.obstacle = false;
     cs.involved = false;
+    cs.staticHits.clear();
   }
+
+  // Static colliders: every particle of an awake body within the margin plus its sub-step's
+  // travel of one (per body, in parallel).
+  if (!colliders.empty()) {
+    parallelFor(static_cast<int>(order.size()), minParallel, [&](int k) {
+      const int s = order[size_t(k)];
+      if (slots[size_t(s)].sleep.asleep) return;
+      ContactScratch::Body& cs = contactScratch[size_t(s)];
+      const BodyState& st = slots[size_t(s)].state;
+      const double margin = kContactMargin * slots[size_t(s)].model->spacing;
+      for (int p = 0; p < st.x.rows(); ++p) {
+        const Vec3 x = st.x.row(p).transpose().cast<double>();
+        const double reach = margin + h * double(st.v.row(p).norm());
+        for (size_t c = 0; c < colliders.size(); ++c) {
+          Vec3 n;
+          const double d = colliderDistance(colliders[c], x, &n);
+          if (d < reach) cs.staticHits.push_back({p, int(c), float(d), n.cast<float>()});
+        }
+      }
+    });
+  }
+  if (!settings.bodyContact || order.size() < 2) return;
+
   // A particle moves at most h·maxSpeed in this sub-step, and so does the surface it meets.
-  // Boxes grow by the grid's base reach (a quarter spacing) plus twice that travel, so no pair
-  // that can touch within the sub-step is missed; each particle then looks only as far as its
-  // own speed needs (findContacts).
+  // Boxes grow by the grid's base reach (the margin) plus twice that travel, so no pair that
+  // can touch within the sub-step is missed; each particle then looks only as far as its own
+  // speed needs (findContacts).
   float maxSpeed = 0;
   for (int s : order) maxSpeed = std::max(maxSpeed, contactScratch[size_t(s)].maxSpeed);
   const float travel = 2.0f * float(h) * maxSpeed;
   auto reachOf = [&](int s) {
     const BodyModel& m = *slots[size_t(s)].model;
-    return m.surface.empty() ? 0.0f : 0.25f * m.spacing;
+    return m.surface.empty() ? 0.0f : (kContactGap + kContactMargin) * m.spacing;
   };
   auto grown = [&](int s) {
     Eigen::AlignedBox3f box = contactScratch[size_t(s)].box;
@@ -93,6 +155,7 @@ int runContactsPhase(const WorkLayout& layout, const ContactSettings& settings, 
   };
 
   // Broad phase: sweep over the grown boxes sorted along x; pairs come out in creation order.
+  // Two sleeping bodies do not meet (nothing between them changes).
   std::vector<int>& sweep = scratch.sweep;
   std::vector<Eigen::AlignedBox3f>& boxes = scratch.boxes;
   std::vector<int>& rank = scratch.rank;
@@ -106,13 +169,13 @@ int runContactsPhase(const WorkLayout& layout, const ContactSettings& settings, 
     const float ma = boxes[size_t(a)].min().x(), mb = boxes[size_t(b)].min().x();
     return ma != mb ? ma < mb : rank[size_t(a)] < rank[size_t(b)];
   });
-  contactPairs.clear();
   for (size_t i = 0; i < sweep.size(); ++i) {
     const int a = sweep[i];
     for (size_t j = i + 1; j < sweep.size(); ++j) {
       const int b = sweep[j];
       if (boxes[size_t(b)].min().x() > boxes[size_t(a)].max().x()) break;
       if (!boxes[size_t(a)].intersects(boxes[size_t(b)])) continue;
+      if (slots[size_t(a)].sleep.asleep && slots[size_t(b)].sleep.asleep) continue;
       const int first = rank[size_t(a)] < rank[size_t(b)] ? a : b;
       const int second = first == a ? b : a;
       if (!slots[size_t(second)].model->surface.empty()) contactPairs.push_back({first, second});
@@ -129,13 +192,14 @@ int runContactsPhase(const WorkLayout& layout, const ContactSettings& settings, 
               if (xb != yb) return xb < yb;
               return rank[size_t(x.probe)] < rank[size_t(y.probe)];
             });
-  if (contactPairs.empty()) return 0;
+  if (contactPairs.empty()) {
+    scratch.deepPairs.clear();
+    return;
+  }
 
   // Each obstacle's grid covers only where its probes' particles are.
   std::vector<int>& obstacles = scratch.obstacles;
-  std::vector<int>& involved = scratch.involved;
   obstacles.clear();
-  involved.clear();
   for (const ContactScratch::Pair& p : contactPairs) {
     ContactScratch::Body& cs = contactScratch[size_t(p.obstacle)];
     if (!cs.obstacle) {
@@ -147,15 +211,11 @@ int runContactsPhase(const WorkLayout& layout, const ContactSettings& settings, 
     probeBox.min().array() -= travel;
     probeBox.max().array() += travel;
     cs.region.extend(probeBox);
-    for (int s : {p.probe, p.obstacle})
-      if (!contactScratch[size_t(s)].involved) {
-        contactScratch[size_t(s)].involved = true;
-        involved.push_back(s);
-      }
+    for (int s : {p.probe, p.obstacle}) contactScratch[size_t(s)].involved = true;
   }
-  std::sort(involved.begin(), involved.end(),
-            [&](int a, int b) { return rank[size_t(a)] < rank[size_t(b)]; });
-  for (int s : involved) prepareContactBody(slots[size_t(s)], contactScratch[size_t(s)]);
+  for (int s : order)
+    if (contactScratch[size_t(s)].involved)
+      prepareGeometry(slots[size_t(s)], contactScratch[size_t(s)]);
   parallelFor(static_cast<int>(obstacles.size()), minParallel, [&](int k) {
     const int s = obstacles[size_t(k)];
     const BodyModel& m = *slots[size_t(s)].model;
@@ -171,80 +231,211 @@ int runContactsPhase(const WorkLayout& layout, const ContactSettings& settings, 
       cs.gridRegion = cs.region;
       cs.gridRegion.min().array() -= kGridSlack * m.spacing;
       cs.gridRegion.max().array() += kGridSlack * m.spacing;
-      // Cells of one spacing: a triangle grown by its reach (a quarter spacing) lands in at most
-      // 3×3×3 cells, and a cell holds a dozen or two triangles (most rejected by their boxes).
+      // Cells of one spacing: a triangle grown by its reach lands in at most 3×3×3 cells, and a
+      // cell holds a dozen or two triangles (most rejected by their boxes).
       cs.grid.build(m.surface, x.col(0).data(), x.col(1).data(), x.col(2).data(), reachOf(s),
                     m.spacing, cs.gridRegion);
       cs.gridPositions = x;
       cs.gridModel = &m;
       drift = 0;
     }
-    cs.view.gridDrift = drift;
+    cs.geometry.gridDrift = drift;
   });
 
-  // Narrow phase reads only, so pairs run in parallel; contacts then resolve one after another
-  // in pair order (Gauss–Seidel), which makes the result independent of the thread count.
+  // Narrow phase reads only, so pairs run in parallel.
   std::vector<std::vector<Contact>>& pairContacts = scratch.pairContacts;
   pairContacts.resize(contactPairs.size());
+  scratch.pairDeep.assign(contactPairs.size(), 0);
+  const bool deepRound = scratch.substeps % kDeepSearchEvery == 0;
   parallelFor(static_cast<int>(contactPairs.size()), minParallel, [&](int k) {
     const ContactScratch::Pair& p = contactPairs[size_t(k)];
     pairContacts[size_t(k)].clear();
-    findContacts(contactScratch[size_t(p.probe)].view, contactScratch[size_t(p.obstacle)].view,
-                 float(h), pairContacts[size_t(k)]);
+    if (slots[size_t(p.probe)].sleep.asleep && slots[size_t(p.obstacle)].sleep.asleep) return;
+    const bool deep =
+        deepRound || std::binary_search(scratch.deepPairs.begin(), scratch.deepPairs.end(),
+                                        std::make_pair(p.probe, p.obstacle));
+    scratch.pairDeep[size_t(k)] =
+        findContacts(contactScratch[size_t(p.probe)].geometry,
+                     contactScratch[size_t(p.obstacle)].geometry, float(h), deep,
+                     pairContacts[size_t(k)]);
   });
-  // Several sweeps: a body pressed by several others (a stack) needs the corrections to travel
-  // through it, and each sweep sees the previous sweeps' results.
-  const float friction = settings.friction;
-  for (int pass = 0; pass < kContactSweeps; ++pass)
-    for (size_t k = 0; k < contactPairs.size(); ++k) {
-      ContactBody& probe = contactScratch[size_t(contactPairs[k].probe)].view;
-      ContactBody& obstacle = contactScratch[size_t(contactPairs[k].obstacle)].view;
-      for (const Contact& c : pairContacts[k]) resolveContact(probe, obstacle, c, friction);
-    }
-  int contactCount = 0;
-  for (const auto& list : pairContacts) contactCount += static_cast<int>(list.size());
-  for (int s : involved) applyRigidResponse(contactScratch[size_t(s)].view);
-  return contactCount;
+  scratch.deepPairs.clear();
+  for (size_t k = 0; k < contactPairs.size(); ++k) {
+    if (scratch.pairDeep[k])
+      scratch.deepPairs.push_back({contactPairs[k].probe, contactPairs[k].obstacle});
+    // An awake body touching a sleeping one wakes it (and its island).
+    if (pairContacts[k].empty()) continue;
+    for (int s : {contactPairs[k].probe, contactPairs[k].obstacle})
+      if (slots[size_t(s)].sleep.asleep) scratch.wake.push_back(s);
+  }
+  std::sort(scratch.deepPairs.begin(), scratch.deepPairs.end());
 }
 
-void runCollidePhase(const WorkLayout& layout, const std::vector<Collider>& colliders,
-                     std::vector<BodySlot>& slots, const std::vector<int>& order,
-                     ContactScratch& scratch) {
-  if (colliders.empty()) return;
+int runSolvePhase(const WorkLayout& layout, const ContactSettings& settings, double h,
+                  std::vector<BodySlot>& slots, const std::vector<int>& order,
+                  const std::vector<Collider>& colliders, ContactScratch& scratch) {
   std::vector<ContactScratch::Body>& contactScratch = scratch.bodies;
-  contactScratch.resize(slots.size());
-  // Bodies are independent here: each runs its own sweeps, so any thread split gives the same
-  // result. Like body–body contacts, a contact acts partly on the body's rigid motion (see
-  // sim/body_contact.h): a stiff body lands and rests as a whole instead of bouncing off the
-  // few particles that touch.
-  parallelFor(static_cast<int>(order.size()),
-              layout.particles >= kMinParallelBodyWork ? 2 : INT32_MAX, [&](int k) {
-                const int s = order[size_t(k)];
-                ContactScratch::Body& cs = contactScratch[size_t(s)];
-                const BodyState& st = slots[size_t(s)].state;
-                cs.staticContacts.clear();
-                for (int p = 0; p < st.x.rows(); ++p) {
-                  const Vec3 x = st.x.row(p).transpose().cast<double>();
-                  for (size_t c = 0; c < colliders.size(); ++c) {
-                    Vec3 n;
-                    if (colliderDistance(colliders[c], x, &n) < 0.0)
-                      cs.staticContacts.push_back({p, int(c)});
-                  }
-                }
-                if (cs.staticContacts.empty()) return;
-                prepareContactBody(slots[size_t(s)], cs);
-                ContactBody& view = cs.view;
-                for (int pass = 0; pass < kContactSweeps; ++pass)
-                  for (const auto& [p, c] : cs.staticContacts) {
-                    const Collider& collider = colliders[size_t(c)];
-                    Vec3 n;
-                    const double d =
-                        colliderDistance(collider, correctedPosition(view, p).cast<double>(), &n);
-                    resolveStaticContact(view, p, n.cast<float>(), float(std::min(d, 0.0)),
-                                         float(collider.friction));
-                  }
-                applyRigidResponse(view);
-              });
+  const std::vector<ContactScratch::Pair>& contactPairs = scratch.pairs;
+  scratch.touching.clear();
+  scratch.activeContacts = 0;
+  // The bodies of the solve: those with a contact, in creation order.
+  std::vector<SolverBody>& bodies = scratch.solverBodies;
+  std::vector<int>& solverIndex = scratch.solverIndex;
+  std::vector<int>& solverSlot = scratch.solverSlot;
+  solverIndex.assign(slots.size(), -1);
+  solverSlot.clear();
+  auto enlist = [&](int s) {
+    if (solverIndex[size_t(s)] < 0) solverIndex[size_t(s)] = 1;
+  };
+  for (size_t k = 0; k < contactPairs.size(); ++k)
+    if (!scratch.pairContacts[k].empty()) {
+      enlist(contactPairs[k].probe);
+      enlist(contactPairs[k].obstacle);
+    }
+  for (int s : order)
+    if (!contactScratch[size_t(s)].staticHits.empty()) enlist(s);
+  for (int s : order)
+    if (solverIndex[size_t(s)] >= 0) {
+      solverIndex[size_t(s)] = int(solverSlot.size());
+      solverSlot.push_back(s);
+    }
+  if (solverSlot.empty()) {
+    scratch.warm.clear();
+    return 0;
+  }
+  bodies.resize(solverSlot.size());
+  const int minParallel = layout.particles >= kMinParallelBodyWork ? 2 : INT32_MAX;
+  parallelFor(static_cast<int>(solverSlot.size()), minParallel, [&](int k) {
+    prepareBody(slots[size_t(solverSlot[size_t(k)])], bodies[size_t(k)]);
+  });
+
+  // Every contact point: body–body in pair order, then static in body order; restitution the
+  // larger of the two sides' (as Box2D), friction the body–body or the collider's.
+  std::vector<ContactPoint>& points = scratch.points;
+  points.clear();
+  for (size_t k = 0; k < contactPairs.size(); ++k) {
+    const ContactScratch::Pair& pair = contactPairs[k];
+    const BodySlot& probe = slots[size_t(pair.probe)];
+    const BodySlot& obstacle = slots[size_t(pair.obstacle)];
+    const float gap = kContactGap * obstacle.model->spacing;
+    const float e = float(std::max(probe.params.restitution, obstacle.params.restitution));
+    for (const Contact& c : scratch.pairContacts[k]) {
+      ContactPoint cp;
+      cp.probe = solverIndex[size_t(pair.probe)];
+      cp.obstacle = solverIndex[size_t(pair.obstacle)];
+      cp.particle = c.particle;
+      cp.triangle = c.triangle;
+      cp.weights = c.weights;
+      cp.normal = c.normal;
+      cp.distance0 = c.distance - gap;
+      cp.friction = settings.friction;
+      cp.restitution = e;
+      points.push_back(cp);
+    }
+  }
+  for (int s : order)
+    for (const ContactScratch::StaticHit& hit : contactScratch[size_t(s)].staticHits) {
+      const Collider& collider = colliders[size_t(hit.collider)];
+      ContactPoint cp;
+      cp.probe = solverIndex[size_t(s)];
+      cp.particle = hit.particle;
+      cp.collider = hit.collider;
+      cp.normal = hit.normal;
+      cp.distance0 = hit.distance;
+      cp.friction = float(collider.friction);
+      cp.restitution = float(std::max(collider.restitution, slots[size_t(s)].params.restitution));
+      points.push_back(cp);
+    }
+
+  // Warm start: the impulses each contact carried at the last sub-step.
+  auto keyOf = [&](const ContactPoint& cp) {
+    return std::array<int, 3>{solverSlot[size_t(cp.probe)],
+                              cp.obstacle >= 0 ? solverSlot[size_t(cp.obstacle)] : -1 - cp.collider,
+                              cp.particle};
+  };
+  for (ContactPoint& cp : points) {
+    ContactScratch::Warm probe;
+    probe.key = keyOf(cp);
+    const auto it = std::lower_bound(scratch.warm.begin(), scratch.warm.end(), probe, lessKey);
+    if (it == scratch.warm.end() || it->key != probe.key) continue;
+    for (int j = 0; j < 2; ++j) {
+      cp.lambda[j] = it->lambda[j];
+      cp.tangent[j] = it->tangent[j];
+    }
+  }
+
+  // Islands: bodies joined by body–body contacts, sleeping bodies (immovable) joining nothing.
+  const int nb = static_cast<int>(bodies.size());
+  std::vector<int>& parent = scratch.islandParent;
+  parent.resize(size_t(nb));
+  for (int b = 0; b < nb; ++b) parent[size_t(b)] = b;
+  for (const ContactPoint& cp : points) {
+    if (cp.obstacle < 0 || bodies[size_t(cp.probe)].immovable ||
+        bodies[size_t(cp.obstacle)].immovable)
+      continue;
+    const int a = findRoot(parent, cp.probe), b = findRoot(parent, cp.obstacle);
+    if (a != b) parent[size_t(std::max(a, b))] = std::min(a, b);
+  }
+  std::vector<int> islandOf(size_t(nb), -1);
+  int islands = 0;
+  for (int b = 0; b < nb; ++b) {
+    if (bodies[size_t(b)].immovable) continue;
+    const int root = findRoot(parent, b);
+    if (islandOf[size_t(root)] < 0) islandOf[size_t(root)] = islands++;
+    islandOf[size_t(b)] = islandOf[size_t(root)];
+  }
+  scratch.islandBodies.resize(size_t(islands));
+  scratch.islandPoints.resize(size_t(islands));
+  for (int i = 0; i < islands; ++i) {
+    scratch.islandBodies[size_t(i)].clear();
+    scratch.islandPoints[size_t(i)].clear();
+  }
+  for (int b = 0; b < nb; ++b)
+    if (islandOf[size_t(b)] >= 0) scratch.islandBodies[size_t(islandOf[size_t(b)])].push_back(b);
+  for (int k = 0; k < static_cast<int>(points.size()); ++k) {
+    const ContactPoint& cp = points[size_t(k)];
+    // With the island of its movable side (detection pairs no two sleeping bodies).
+    const int side = bodies[size_t(cp.probe)].immovable ? cp.obstacle : cp.probe;
+    scratch.islandPoints[size_t(islandOf[size_t(side)])].push_back(k);
+  }
+
+  ContactSolverSettings solver;
+  solver.h = float(h);
+  solver.restitutionThreshold = settings.restitutionThreshold;
+  solver.up = settings.gravity.squaredNorm() > 0.0
+                  ? Vec3f((-settings.gravity.normalized()).cast<float>())
+                  : Vec3f::Zero();
+  parallelFor(islands, minParallel, [&](int i) {
+    solveIsland(bodies, points, scratch.islandBodies[size_t(i)], scratch.islandPoints[size_t(i)],
+                colliders, solver);
+  });
+  parallelFor(nb, minParallel, [&](int b) {
+    if (!bodies[size_t(b)].immovable) finishSolverBody(bodies[size_t(b)]);
+  });
+
+  // Keep the impulses for the next sub-step; report the pairs that touched and the contacts
+  // that carried load.
+  std::vector<ContactScratch::Warm>& next = scratch.warmNext;
+  next.clear();
+  for (const ContactPoint& cp : points) {
+    if (cp.obstacle >= 0) {
+      const std::pair<int, int> pair{solverSlot[size_t(cp.probe)], solverSlot[size_t(cp.obstacle)]};
+      if (scratch.touching.empty() || scratch.touching.back() != pair)
+        scratch.touching.push_back(pair);
+    }
+    if (!(cp.lambda[0] > 0.0f || cp.lambda[1] > 0.0f)) continue;
+    if (cp.obstacle >= 0) ++scratch.activeContacts;
+    ContactScratch::Warm w;
+    w.key = keyOf(cp);
+    for (int j = 0; j < 2; ++j) {
+      w.lambda[j] = cp.lambda[j];
+      w.tangent[j] = cp.tangent[j];
+    }
+    next.push_back(w);
+  }
+  std::sort(next.begin(), next.end(), lessKey);
+  std::swap(scratch.warm, next);
+  return scratch.activeContacts;
 }
 
 }  // namespace sb

@@ -1,17 +1,22 @@
-// The Contacts and Collide phases (docs/design.md §3): particles kept out of the other bodies'
-// closed surfaces (body–body contact) and out of the static colliders, with Coulomb friction.
-// A contact acts partly on a body's rigid motion (see contact/body_contact.h).
+// The Contacts and Solve phases (docs/design.md §3, §5.5): particles kept out of the other
+// bodies' closed surfaces (body–body contact) and out of the static colliders, with Coulomb
+// friction and restitution.
 //
-// Contacts — per sub-step: bounds and speeds of every body; sweep-and-prune over grown boxes;
-//   per obstacle a surface grid over where its probes are (kept while the surface drifts less
-//   than a quarter spacing); narrow phase per pair in parallel; resolution in pair order
-//   (Gauss–Seidel), so the result does not depend on the thread count.
-//   Reads: x, v, models, params (α), settings (bodyContact, contactFriction). Writes: x, v.
-// Collide — per body, its particles inside a static collider are pushed out and their
-//   approaching velocity removed, with friction; bodies are independent.
-//   Reads: x, v, models, params, colliders. Writes: x, v.
+// Contacts — detection, per sub-step: bounds and speeds of every body; sweep-and-prune over
+//   grown boxes; per obstacle a surface grid over where its probes are (kept while the surface
+//   drifts less than a quarter spacing); narrow phase per pair in parallel, with a whole-surface
+//   search for deep particles every few sub-steps (every sub-step for pairs that found some);
+//   every particle near a static collider. Sleeping bodies are obstacles only: pairs of two
+//   sleeping bodies are skipped, and a sleeping body an awake one touches is asked to wake.
+//   Reads: x, v, models, settings, colliders, sleep state. Writes: the scratch only.
+// Solve — every contact of the sub-step, body–body and static, in one solve (contact_solver.h),
+//   per island of touching bodies (islands share no body, so they run in parallel, each in a
+//   fixed order: the result does not depend on the thread count); the impulses warm start the
+//   next sub-step. Sleeping bodies do not move.
+//   Reads: x, v, models, params (α, restitution), settings, colliders. Writes: x, v.
 #pragma once
 
+#include <array>
 #include <utility>
 #include <vector>
 
@@ -20,14 +25,29 @@
 #include "sim/world/body.h"
 #include "sim/world/collider.h"
 #include "sim/world/contact/body_contact.h"
+#include "sim/world/contact/contact_solver.h"
 #include "sim/world/contact/surface_grid.h"
 #include "sim/world/work_layout.h"
 
 namespace sb {
 
+struct ContactSettings {
+  bool bodyContact = true;
+  float friction = 0.5f;              // μ between bodies
+  float restitutionThreshold = 1.0f;  // m/s: slower approaches do not bounce
+  Vec3 gravity = Vec3::Zero();        // m/s² (the order of shock propagation)
+};
+
 // Per-body data of the contact phases, derived from the positions every sub-step (indexed by
-// slot), and the scratch lists of the phase, kept between sub-steps so they do not allocate.
+// slot), and the scratch of the phases, kept between sub-steps so they do not allocate; the
+// impulses of the last sub-step are kept to warm start the next (cleared when bodies change).
 struct ContactScratch {
+  // A particle near a static collider.
+  struct StaticHit {
+    int particle, collider;
+    float distance;  // signed, metres
+    Vec3f normal;    // out of the collider
+  };
   struct Body {
     Eigen::AlignedBox3f box;             // particles' bounding box
     float maxSpeed = 0;                  // m/s
@@ -37,38 +57,61 @@ struct ContactScratch {
     Eigen::AlignedBox3f region;          // obstacles: bounding box of the probes that meet it
     bool involved = false;               // meets some other body this sub-step
     SurfaceGrid grid;
-    ContactBody view;  // set up by prepareContactBody for involved bodies
+    ContactGeometry geometry;  // set up for involved bodies
     // The grid's surface positions and region when it was built, and whose it is (a slot can
     // be reused by another body).
     MatX3f gridPositions;
     Eigen::AlignedBox3f gridRegion;
     const BodyModel* gridModel = nullptr;
-    std::vector<std::pair<int, int>> staticContacts;  // (particle, collider) inside a collider
+    std::vector<StaticHit> staticHits;
   };
   // A probe body whose particles are tested against an obstacle body's surface (slots).
   struct Pair {
     int probe, obstacle;
   };
+  // The impulses of one contact, by (probe slot, obstacle slot or −1 − collider, particle).
+  struct Warm {
+    std::array<int, 3> key;
+    float lambda[2];
+    Vec3f tangent[2];
+  };
   std::vector<Body> bodies;  // per slot
   std::vector<Pair> pairs;
   std::vector<std::vector<Contact>> pairContacts;  // per pair
-  // Bodies in sweep order, grown boxes and creation rank per slot, obstacle and involved slots.
-  std::vector<int> sweep, rank, obstacles, involved;
+  std::vector<char> pairDeep;                      // per pair: found deep particles
+  // Bodies in sweep order, grown boxes and creation rank per slot, obstacle slots.
+  std::vector<int> sweep, rank, obstacles;
   std::vector<Eigen::AlignedBox3f> boxes;
+  // Deep search: sub-steps counted, and the (probe, obstacle) slot pairs that found deep
+  // particles at the last sub-step (sorted).
+  long long substeps = 0;
+  std::vector<std::pair<int, int>> deepPairs;
+  // Sleeping slots an awake body touched (the World wakes their islands).
+  std::vector<int> wake;
+
+  // The solve: bodies by solver index and their slots, every contact point, islands.
+  std::vector<SolverBody> solverBodies;
+  std::vector<int> solverIndex, solverSlot;  // per slot (−1: not in the solve), per solver body
+  std::vector<ContactPoint> points;
+  std::vector<int> islandParent;                              // union-find over solver bodies
+  std::vector<std::vector<int>> islandBodies, islandPoints;  // per island
+  std::vector<Warm> warm, warmNext;                          // sorted by key
+  // After the solve: slot pairs joined by a body–body contact this sub-step (for the sleep
+  // islands) and the number of body–body contacts that carried load.
+  std::vector<std::pair<int, int>> touching;
+  int activeContacts = 0;
 };
 
-struct ContactSettings {
-  bool bodyContact = true;
-  float friction = 0.5f;  // μ between bodies
-};
+// Detection. `order`: every alive slot in creation order; sleeping bodies have
+// slot.sleep.asleep set.
+void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings, double h,
+                      std::vector<BodySlot>& slots, const std::vector<int>& order,
+                      const std::vector<Collider>& colliders, ContactScratch& scratch);
 
-// Returns the number of body–body contacts resolved.
-int runContactsPhase(const WorkLayout& layout, const ContactSettings& settings, double h,
-                     std::vector<BodySlot>& slots, const std::vector<int>& order,
-                     ContactScratch& scratch);
-
-void runCollidePhase(const WorkLayout& layout, const std::vector<Collider>& colliders,
-                     std::vector<BodySlot>& slots, const std::vector<int>& order,
-                     ContactScratch& scratch);
+// The solve of what runContactsPhase found; returns the number of body–body contacts that
+// carried load.
+int runSolvePhase(const WorkLayout& layout, const ContactSettings& settings, double h,
+                  std::vector<BodySlot>& slots, const std::vector<int>& order,
+                  const std::vector<Collider>& colliders, ContactScratch& scratch);
 
 }  // namespace sb

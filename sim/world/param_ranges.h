@@ -27,6 +27,8 @@ inline constexpr ParamRange timeStep{1e-7, 10.0};    // s, per step() (and per d
 inline constexpr ParamRange substeps{1, 1000};       // sub-steps per step()
 inline constexpr ParamRange gravityNorm{0.0, 1e4};   // m/s², length of the gravity vector
 inline constexpr ParamRange friction{0.0, 1000.0};   // μ, colliders and body–body contact
+inline constexpr ParamRange restitution{0.0, 1.0};   // e, colliders and bodies
+inline constexpr ParamRange restitutionThreshold{0.0, 1e4};  // m/s
 // Body parameters.
 inline constexpr ParamRange alpha{0.0, 1.0};
 inline constexpr ParamRange beta{0.0, 1.0};

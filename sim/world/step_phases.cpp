@@ -18,14 +18,16 @@ const char* phaseName(Phase phase) {
       return "wholebody";
     case Phase::Velocities:
       return "velocities";
-    case Phase::Damping:
-      return "damping";
     case Phase::Contacts:
       return "contacts";
-    case Phase::Collide:
-      return "collide";
+    case Phase::Solve:
+      return "solve";
+    case Phase::Damping:
+      return "damping";
     case Phase::Check:
       return "check";
+    case Phase::Sleep:
+      return "sleep";
   }
   return "?";
 }

@@ -18,17 +18,18 @@ enum class Phase : int {
   Project,     // per particle: α of the way to the blend of its clusters' goals
   WholeBody,   // bodies with several clusters: the whole-body level's fit and projection
   Velocities,  // v from the positions' change; the body's spin kept
+  Contacts,    // contact detection: bounds, broad phase, grids, narrow phase, static colliders
+  Solve,       // the contact solve: body–body and static contacts together, per island
   Damping,     // velocities relative to each body's rigid motion damped
-  Contacts,    // body–body contact: bounds, grids, detection, response
-  Collide,     // static colliders
   Check,       // NaN/Inf detection and reset
+  Sleep,       // bodies at rest fall asleep, island by island
 };
 
-inline constexpr int kPhaseCount = 11;
+inline constexpr int kPhaseCount = 12;
 inline constexpr std::array<Phase, kPhaseCount> kPhases = {
-    Phase::External,  Phase::Predict,    Phase::Goals,   Phase::Plasticity,
-    Phase::Project,   Phase::WholeBody,  Phase::Velocities, Phase::Damping,
-    Phase::Contacts,  Phase::Collide,    Phase::Check,
+    Phase::External, Phase::Predict,  Phase::Goals,      Phase::Plasticity,
+    Phase::Project,  Phase::WholeBody, Phase::Velocities, Phase::Contacts,
+    Phase::Solve,    Phase::Damping,  Phase::Check,      Phase::Sleep,
 };
 
 // Lower-case name ("goals"), used as label and as key in files.

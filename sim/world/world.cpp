@@ -14,6 +14,7 @@
 #include "sim/world/integrate_phase.h"
 #include "sim/world/mass_properties.h"
 #include "sim/world/param_ranges.h"
+#include "sim/world/sleep_phase.h"
 #include "sim/world/work_layout.h"
 
 namespace sb {
@@ -35,6 +36,7 @@ void validateParams(const BodyParams& p) {
   requireRange("alpha", limits::alpha, p.alpha);
   requireRange("beta", limits::beta, p.beta);
   requireRange("damping", limits::damping, p.damping);
+  requireRange("restitution", limits::restitution, p.restitution);
   requireRange("plasticity.yield", limits::plasticYield, p.plasticity.yield);
   requireRange("plasticity.creep", limits::plasticCreep, p.plasticity.creep);
   requireRange("plasticity.max", limits::plasticMax, p.plasticity.max);
@@ -51,6 +53,8 @@ struct World::Data {
   std::vector<Collider> colliders;
   std::vector<BodySlot> slots;
   std::vector<int> order;  // alive slots in creation order
+  std::vector<int> awake;  // alive slots not asleep, in creation order (what the phases step)
+  bool awakeDirty = true;  // a body fell asleep, woke, came or went: rebuild `awake`
   std::map<int, DragDef> drags;
   int nextDragId = 1;
   std::vector<QueuedForce> forces;
@@ -63,7 +67,8 @@ struct World::Data {
   // Scratch of the phases, reused every sub-step (no allocations in the loop).
   GoalsScratch goalsScratch;
   ContactScratch contactScratch;
-  std::vector<char> blockBad, bad;
+  SleepScratch sleepScratch;
+  std::vector<char> blockBad, bad, held;
 
   BodySlot& slot(BodyHandle h) {
     if (h.index >= slots.size() || !slots[h.index].alive ||
@@ -77,19 +82,41 @@ struct World::Data {
 
   void substep(double h, StepProfile& prof);
   void resetFailedBodies();
+  // Wakes the body in slot s with its island (sleep_phase.h).
+  void wake(int s) {
+    if (wakeIsland(slots, order, s)) awakeDirty = true;
+  }
+  void wakeAll() {
+    for (int s : order) wake(s);
+  }
 };
 
 // ---------------------------------------------------------------------------------------------
 // One sub-step: the pipeline (docs/design.md §3).
 
 void World::Data::substep(double h, StepProfile& prof) {
+  // A drag holds its body awake; bodies an awake body touched in the last sub-step wake.
+  held.assign(slots.size(), 0);
+  for (const auto& [id, drag] : drags) {
+    held[drag.body.index] = 1;
+    wake(int(drag.body.index));
+  }
+  for (int s : contactScratch.wake) wake(s);
+  contactScratch.wake.clear();
+  if (awakeDirty) {
+    awake.clear();
+    for (int s : order)
+      if (!slots[size_t(s)].sleep.asleep) awake.push_back(s);
+    awakeDirty = false;
+    layoutDirty = true;
+  }
   // Each body's clusters on the path its parameters call for; work lists for those paths.
-  for (int s : order) {
+  for (int s : awake) {
     BodySlot& b = slots[size_t(s)];
     if (b.state.clusters.selectPath(*b.model, b.params)) layoutDirty = true;
   }
   if (layoutDirty) {
-    layout = buildWorkLayout(slots, order);
+    layout = buildWorkLayout(slots, awake);
     layoutDirty = false;
   }
   auto timed = [&](Phase phase, const auto& run) {
@@ -100,21 +127,31 @@ void World::Data::substep(double h, StepProfile& prof) {
   bad.assign(slots.size(), 0);
 
   timed(Phase::External, [&] { runExternalPhase(forces, drags, h, slots); });
-  timed(Phase::Predict, [&] { runPredictPhase(layout, settings.gravity, h, slots, order); });
+  timed(Phase::Predict, [&] { runPredictPhase(layout, settings.gravity, h, slots, awake); });
   const GoalsTimes goals = runGoalsPhase(layout, h, slots, goalsScratch, bad);
   prof[Phase::Goals] += goals.goals;
   prof[Phase::Plasticity] += goals.plasticity;
-  timed(Phase::Project, [&] { runProjectPhase(layout, slots, order, blockBad, bad); });
-  timed(Phase::WholeBody, [&] { runWholeBodyPhase(layout, slots, order, bad); });
+  timed(Phase::Project, [&] { runProjectPhase(layout, slots, awake, blockBad, bad); });
+  timed(Phase::WholeBody, [&] { runWholeBodyPhase(layout, slots, awake, bad); });
   timed(Phase::Velocities,
-        [&] { runVelocitiesPhase(layout, settings.gravity, h, slots, order); });
-  timed(Phase::Damping, [&] { runDampingPhase(layout, slots, order); });
+        [&] { runVelocitiesPhase(layout, settings.gravity, h, slots, awake); });
+  const ContactSettings contact{settings.bodyContact, float(settings.contactFriction),
+                                float(settings.restitutionThreshold), settings.gravity};
   timed(Phase::Contacts, [&] {
-    const ContactSettings contact{settings.bodyContact, float(settings.contactFriction)};
-    contactCount = runContactsPhase(layout, contact, h, slots, order, contactScratch);
+    runContactsPhase(layout, contact, h, slots, order, colliders, contactScratch);
   });
-  timed(Phase::Collide, [&] { runCollidePhase(layout, colliders, slots, order, contactScratch); });
+  timed(Phase::Solve, [&] {
+    contactCount = runSolvePhase(layout, contact, h, slots, order, colliders, contactScratch);
+  });
+  // Damping after the contacts: the velocity the contact solve leaves relative to a body's
+  // rigid motion (its impulses act on single particles) is damped in the same sub-step.
+  timed(Phase::Damping, [&] { runDampingPhase(layout, slots, awake); });
   timed(Phase::Check, [&] { resetFailedBodies(); });
+  timed(Phase::Sleep, [&] {
+    if (runSleepPhase(h, settings.sleep, slots, awake, contactScratch.touching, held,
+                      sleepScratch))
+      awakeDirty = true;
+  });
 }
 
 // The Check phase: bodies that produced NaN/Inf go back to their start state, with an event.
@@ -154,12 +191,21 @@ void World::setSettings(const WorldSettings& s) {
   requireRange("timeStep", limits::timeStep, s.timeStep);
   requireRange("substeps", limits::substeps, s.substeps);
   requireRange("contactFriction", limits::friction, s.contactFriction);
+  requireRange("restitutionThreshold", limits::restitutionThreshold, s.restitutionThreshold);
+  // Gravity, friction, restitution, contact or sleep changes can set resting bodies moving.
+  const WorldSettings& o = d_->settings;
+  const bool same = o.gravity == s.gravity && o.timeStep == s.timeStep &&
+                    o.substeps == s.substeps && o.bodyContact == s.bodyContact &&
+                    o.contactFriction == s.contactFriction &&
+                    o.restitutionThreshold == s.restitutionThreshold && o.sleep == s.sleep;
   d_->settings = s;
+  if (!same) d_->wakeAll();
 }
 
 void World::addCollider(const Collider& c) {
   auto finite = [](const Vec3& v) { return v.allFinite(); };
   requireRange("friction", limits::friction, c.friction);
+  requireRange("restitution", limits::restitution, c.restitution);
   switch (c.shape) {
     case Collider::Shape::Plane:
       if (!finite(c.normal) || std::abs(c.normal.norm() - 1.0) > 1e-6 || !std::isfinite(c.offset))
@@ -181,10 +227,12 @@ void World::addCollider(const Collider& c) {
       break;
   }
   d_->colliders.push_back(c);
+  d_->wakeAll();
 }
 
 void World::clearColliders() {
   d_->colliders.clear();
+  d_->wakeAll();
 }
 const std::vector<Collider>& World::colliders() const {
   return d_->colliders;
@@ -265,18 +313,24 @@ BodyHandle World::addBody(const BodyDef& def) {
   slot.generation = d_->slots[index].generation;
   d_->slots[index] = std::move(slot);
   d_->order.push_back(static_cast<int>(index));
-  d_->layoutDirty = true;
+  d_->awakeDirty = true;
+  d_->contactScratch.warm.clear();  // keyed by slot: a reused slot is another body
   return d_->handleOf(static_cast<int>(index));
 }
 
 void World::removeBody(BodyHandle h) {
   BodySlot& s = d_->slot(h);
+  d_->wake(int(h.index));  // what rested on it wakes
+  s.sleep = SleepState{};
   s.alive = false;
   ++s.generation;
   s.model.reset();
   s.state = BodyState{};
   d_->order.erase(std::find(d_->order.begin(), d_->order.end(), int(h.index)));
-  d_->layoutDirty = true;
+  d_->awakeDirty = true;
+  d_->contactScratch.warm.clear();
+  auto& wakes = d_->contactScratch.wake;
+  wakes.erase(std::remove(wakes.begin(), wakes.end(), int(h.index)), wakes.end());
   for (auto it = d_->drags.begin(); it != d_->drags.end();)
     it = it->second.body == h ? d_->drags.erase(it) : std::next(it);
   // Forces queued for the removed body die with it (step() must not meet a stale handle).
@@ -309,6 +363,7 @@ void World::setParams(BodyHandle h, const BodyParams& p) {
   BodySlot& s = d_->slot(h);
   validateParams(p);
   s.params = p;  // a change of cluster path is taken up at the start of the next sub-step
+  d_->wake(int(h.index));
 }
 
 const ClusterDef& World::clusterDef(BodyHandle h) const {
@@ -321,6 +376,7 @@ void World::setClusters(BodyHandle h, const ClusterDef& clusters) {
   s.model = std::move(model);
   s.state.clusters.reset(*s.model, s.state.x);
   d_->layoutDirty = true;
+  d_->wake(int(h.index));
 }
 
 int World::clusterCount(BodyHandle h) const {
@@ -380,6 +436,7 @@ void World::setState(BodyHandle h, const Eigen::MatrixX3d& x, const Eigen::Matri
   if (!x.allFinite() || !v.allFinite()) throw std::invalid_argument("setState: not finite");
   s.state.x = x.cast<float>();
   s.state.v = v.cast<float>();
+  d_->wake(int(h.index));
 }
 
 Eigen::MatrixX3d World::goals(BodyHandle h) const {
@@ -411,6 +468,7 @@ void World::addForce(BodyHandle h, int particle, const Vec3& force) {
     throw std::invalid_argument("addForce: particle index out of range");
   if (!force.allFinite()) throw std::invalid_argument("addForce: force not finite");
   d_->forces.push_back({h, particle, force});
+  d_->wake(int(h.index));
 }
 
 int World::addDrag(const DragDef& drag) {
@@ -468,7 +526,11 @@ void World::reset() {
   for (int s : d_->order) {
     BodySlot& b = d_->slots[size_t(s)];
     resetBodyState(*b.model, b.state);
+    b.sleep = SleepState{};
   }
+  d_->awakeDirty = true;
+  d_->contactScratch.warm.clear();
+  d_->contactScratch.wake.clear();
   d_->drags.clear();
   d_->forces.clear();
   d_->time = 0;
@@ -479,6 +541,21 @@ double World::time() const {
 }
 int World::lastContactCount() const {
   return d_->contactCount;
+}
+
+bool World::isSleeping(BodyHandle h) const {
+  return d_->slot(h).sleep.asleep;
+}
+
+int World::sleepingCount() const {
+  int n = 0;
+  for (int s : d_->order) n += d_->slots[size_t(s)].sleep.asleep;
+  return n;
+}
+
+void World::wake(BodyHandle h) {
+  d_->slot(h);  // throws on a stale handle
+  d_->wake(int(h.index));
 }
 
 const StepProfile& World::lastProfile() const {

@@ -10,10 +10,12 @@
 //   WholeBody   bodies with several clusters: one cluster over the whole body, projected the
 //               same way, so the material does not depend on the number of clusters
 //   Velocities  v = v̂ + (x − x̂)/h + h·gravity, the body's spin kept
+//   Contacts    contact detection: particles near other bodies' surfaces and near the static
+//               colliders                                                  (contact_phase.h)
+//   Solve       every contact in one solve: no penetration, Coulomb friction, restitution
 //   Damping     damp velocity relative to each body's rigid motion
-//   Contacts    particles pushed out of other bodies' surfaces, friction  (contact_phase.h)
-//   Collide     the same against the static colliders
 //   Check       bodies with NaN/Inf are reset to their start and reported as events
+//   Sleep       bodies at rest fall asleep, island by island                (sleep_phase.h)
 // The step is position-based and stable at any time step (for α ≤ 1 it maps a deformation to
 // at most √(1 − α) of itself per sub-step); rigid mode with α = 1 keeps the shape exactly.
 // Results depend only on the input and never on the thread count: every sum is formed in a
@@ -38,6 +40,14 @@ struct WorldSettings {
   int substeps = 1;                      // sub-steps per step(), 1 … 1000
   bool bodyContact = true;               // bodies with a surface keep other bodies out
   double contactFriction = 0.5;          // μ in [0, 1000] between bodies (as Collider::friction)
+  // Approach speed (m/s, [0, 1e4]) below which contacts do not bounce whatever their
+  // restitution: a resting body's small impacts (gravity's h·g every sub-step) stay inelastic.
+  double restitutionThreshold = 1.0;
+  // Bodies at rest sleep: a body whose particles have all been slower than its sleep speed
+  // (5 % of its size per second, at most 5 cm/s) for 0.5 s, together with every body it
+  // touches, skips the whole step until something wakes it (an awake body touching it, a drag,
+  // a force, setParams/setClusters/setState, a collider or settings change).
+  bool sleep = true;
 };
 
 // Refers to a body; stays valid until the body is removed (then contains() is false).
@@ -136,8 +146,14 @@ class World {
   void reset();          // every body back to its start state; plasticity and drags cleared
   double time() const;   // seconds simulated since creation or reset
   const StepProfile& lastProfile() const;  // phases of the last step() call
-  int lastContactCount() const;            // body–body contacts resolved in the last sub-step
+  int lastContactCount() const;  // body–body contacts that carried load in the last sub-step
   std::vector<WorldEvent> takeEvents();    // returns and clears pending events
+
+  // ---- sleep (WorldSettings::sleep) ----
+  bool isSleeping(BodyHandle body) const;
+  int sleepingCount() const;
+  // Wakes the body and every body that fell asleep with it (nothing for an awake body).
+  void wake(BodyHandle body);
 
   // Hash of the physical state (positions, velocities, plastic deformation), bit-exact. The
   // solver's caches — warm-start rotations and reference points of the cluster fits — are left

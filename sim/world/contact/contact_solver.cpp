@@ -1,0 +1,423 @@
+#include "sim/world/contact/contact_solver.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "sim/world/mass_properties.h"
+
+namespace sb {
+
+namespace {
+
+// Velocity sweeps over an island's contacts (Gauss–Seidel with accumulated impulses), and
+// position sweeps for what is still inside afterwards.
+constexpr int kVelocitySweeps = 8;
+constexpr int kPositionSweeps = 2;
+// Position-only recovery per contact and sweep, in spacings of the probe body: pushes without
+// velocity are free work, so they are rate-bounded (a pile whose residue was projected out at
+// once kept buzzing at 0.1 m/s).
+constexpr float kMaxPush = 0.02f;
+// A particle deeper than this (spacings of the probe) is pushed out by moving the bodies as a
+// whole: a local push of a soft body's particle would be undone by its goal at the next step.
+constexpr float kDeepRecovery = 0.25f;
+
+Eigen::Matrix3f rotationOf(const Vec3f& turn) {
+  const float angle = turn.norm();
+  if (!(angle > 0.0f)) return Eigen::Matrix3f::Identity();
+  return Eigen::AngleAxisf(angle, turn / angle).toRotationMatrix();
+}
+
+// One side of a contact: a particle (count 1), a point of a triangle (count 3), or a static
+// collider (no body).
+struct Side {
+  SolverBody* body = nullptr;
+  int idx[3] = {0, 0, 0};
+  float w[3] = {1, 0, 0};
+  int count = 0;
+};
+
+Side probeSide(std::vector<SolverBody>& bodies, const ContactPoint& c) {
+  Side s;
+  s.body = &bodies[size_t(c.probe)];
+  s.idx[0] = c.particle;
+  s.count = 1;
+  return s;
+}
+
+Side obstacleSide(std::vector<SolverBody>& bodies, const ContactPoint& c) {
+  Side s;
+  if (c.obstacle < 0) return s;
+  s.body = &bodies[size_t(c.obstacle)];
+  const mesh::Triangle& t = (*s.body->triangles)[size_t(c.triangle)];
+  for (int k = 0; k < 3; ++k) {
+    s.idx[k] = t[size_t(k)];
+    s.w[k] = c.weights[k];
+  }
+  s.count = 3;
+  return s;
+}
+
+Vec3f leverArm(const Side& s) {
+  if (!s.body) return Vec3f::Zero();
+  Vec3f r = Vec3f::Zero();
+  for (int k = 0; k < s.count; ++k) r += s.w[k] * (s.body->position(s.idx[k]) - s.body->centre);
+  return r;
+}
+
+// Velocity of the side's point itself, gathered rigid corrections included.
+Vec3f pointVelocity(const Side& s, const Vec3f& r) {
+  if (!s.body) return Vec3f::Zero();
+  Vec3f v = Vec3f::Zero();
+  for (int k = 0; k < s.count; ++k) v += s.w[k] * s.body->velocity(s.idx[k]);
+  return v + s.body->deltaV + s.body->deltaW.cross(r);
+}
+
+// The share of a side's response taken by its rigid motion: A (blended) the body's rigid share;
+// B the particles alone, except on bodies with share 1, which answer as a whole (a local
+// impulse would bend a rigid body for a sub-step).
+float shareOf(const Side& s, bool blended) {
+  const float sh = s.body->rigidShare;
+  return blended ? sh : (sh >= 1.0f ? 1.0f : 0.0f);
+}
+
+// What constraint A (blended) or B measures at the side's point.
+Vec3f measuredVelocity(const Side& s, const Vec3f& r, bool blended) {
+  if (!s.body) return Vec3f::Zero();
+  const Vec3f v = pointVelocity(s, r);
+  const float sh = shareOf(s, blended);
+  if (sh == 0.0f) return v;
+  return (1.0f - sh) * v + sh * (s.body->fitV + s.body->fitW.cross(r));
+}
+
+float localInverseMass(const Side& s) {
+  float k = 0;
+  for (int c = 0; c < s.count; ++c) k += s.w[c] * s.w[c] * s.body->invMass[s.idx[c]];
+  return k;
+}
+
+float rigidInverseMass(const SolverBody& b, const Vec3f& r, const Vec3f& d) {
+  const Vec3f rd = r.cross(d);
+  return b.invTotalMass + rd.dot(b.invInertia * rd);
+}
+
+// How much the measured velocity along unit d changes per unit impulse along d (C M⁻¹ Cᵀ).
+float measuredInverseMass(const Side& s, const Vec3f& r, const Vec3f& d, bool blended) {
+  if (!s.body || s.body->fixed()) return 0.0f;
+  const float local = localInverseMass(s);
+  const float sh = shareOf(s, blended);
+  if (sh == 0.0f) return local;
+  const SolverBody& b = *s.body;
+  const float kappa = rigidInverseMass(b, r, d);
+  const float point = (1.0f - sh) * local + sh * kappa;
+  // The fitted rigid velocity at r changes by the whole impulse (both shares): the particle
+  // share carries its momentum into the fit too.
+  float fitLocal = 0;
+  const Vec3f rd = r.cross(d);
+  for (int c = 0; c < s.count; ++c) {
+    const int i = s.idx[c];
+    const float carried = s.w[c] * b.invMass[i] * b.mass[i];  // 0 for pinned, else w
+    const Vec3f rc = b.position(i) - b.centre;
+    fitLocal += carried * (b.invTotalMass + rc.cross(d).dot(b.invInertia * rd));
+  }
+  const float fit = (1.0f - sh) * fitLocal + sh * kappa;
+  return (1.0f - sh) * point + sh * fit;
+}
+
+// How far the particle (point) itself moves per unit impulse of A along d.
+float pointInverseMass(const Side& s, const Vec3f& r, const Vec3f& d) {
+  if (!s.body || s.body->fixed()) return 0.0f;
+  const float sh = s.body->rigidShare;
+  return (1.0f - sh) * localInverseMass(s) + sh * rigidInverseMass(*s.body, r, d);
+}
+
+// Applies impulse J (N·s) to the side with the given rigid share. Velocities change by Δv and
+// positions by h·Δv; with positionsOnly, J is a position correction (kg·m) and only positions
+// move.
+void applyImpulse(const Side& s, const Vec3f& r, const Vec3f& J, float share, float h,
+                  bool positionsOnly) {
+  if (!s.body || s.body->fixed()) return;
+  SolverBody& b = *s.body;
+  Vec3f carriedLinear = Vec3f::Zero(), carriedAngular = Vec3f::Zero();
+  if (share < 1.0f)
+    for (int c = 0; c < s.count; ++c) {
+      const int i = s.idx[c];
+      const Vec3f dv = (1.0f - share) * s.w[c] * b.invMass[i] * J;
+      if (positionsOnly) {
+        for (int a = 0; a < 3; ++a) b.x[a][i] += dv[a];
+      } else {
+        for (int a = 0; a < 3; ++a) {
+          b.v[a][i] += dv[a];
+          b.x[a][i] += h * dv[a];
+        }
+        const Vec3f carried = b.mass[i] * dv;
+        carriedLinear += carried;
+        carriedAngular += (b.position(i) - b.centre).cross(carried);
+      }
+    }
+  if (share > 0.0f) {
+    const Vec3f linear = share * b.invTotalMass * J;
+    const Vec3f angular = share * (b.invInertia * r.cross(J));
+    if (positionsOnly) {
+      b.shift += linear;
+      b.turn += angular;
+      b.turnRotation = rotationOf(b.turn);
+    } else {
+      b.deltaV += linear;
+      b.deltaW += angular;
+      b.shift += h * linear;
+      b.turn += h * angular;
+    }
+  }
+  if (!positionsOnly) {
+    b.fitV += b.invTotalMass * (carriedLinear + share * J);
+    b.fitW += b.invInertia * (carriedAngular + share * r.cross(J));
+  }
+}
+
+// Effective inverse masses of A and B along n, t1, t2 and the point's own along n, with the
+// sides' current fixed/immovable state.
+void computeInverseMasses(const Side& p, const Side& o, ContactPoint& c) {
+  const Vec3f dirs[3] = {c.normal, c.tangent1, c.tangent2};
+  for (int j = 0; j < 2; ++j)
+    for (int d = 0; d < 3; ++d)
+      c.inverseMass[j][d] = measuredInverseMass(p, c.leverProbe, dirs[d], j == 0) +
+                            measuredInverseMass(o, c.leverObstacle, dirs[d], j == 0);
+  c.pointInverseMass =
+      pointInverseMass(p, c.leverProbe, c.normal) + pointInverseMass(o, c.leverObstacle, c.normal);
+}
+
+void prepareContact(std::vector<SolverBody>& bodies, ContactPoint& c,
+                    const ContactSolverSettings& settings) {
+  const float h = settings.h;
+  const Side p = probeSide(bodies, c), o = obstacleSide(bodies, c);
+  c.leverProbe = leverArm(p);
+  c.leverObstacle = leverArm(o);
+  const Vec3f& n = c.normal;
+  c.tangent1 = (std::abs(n.x()) < 0.6f ? Vec3f::UnitX() : Vec3f::UnitY()).cross(n).normalized();
+  c.tangent2 = n.cross(c.tangent1);
+  computeInverseMasses(p, o, c);
+  // The approach now (after the integration) and where the particle was at the start of the
+  // sub-step (positions follow velocities: x = x₀ + h·v): it may come as close as touching at
+  // the end of the sub-step; one already inside is stopped, not thrown out.
+  const float u0 = (pointVelocity(p, c.leverProbe) - pointVelocity(o, c.leverObstacle)).dot(n);
+  const float start = c.distance0 - h * u0;
+  c.target = std::min(-start / h, std::max(u0, 0.0f));
+  // Bounce only where the surfaces meet within this sub-step, faster than the threshold.
+  if (c.restitution > 0.0f && -u0 > settings.restitutionThreshold && c.distance0 < 0.0f)
+    c.target = std::max(c.target, -c.restitution * u0);
+}
+
+void warmStart(std::vector<SolverBody>& bodies, ContactPoint& c, float h) {
+  const Side p = probeSide(bodies, c), o = obstacleSide(bodies, c);
+  const Vec3f& n = c.normal;
+  for (int j = 0; j < 2; ++j) {
+    const bool blended = j == 0;
+    if (!(c.inverseMass[j][0] > 0.0f) || !(c.lambda[j] > 0.0f)) {
+      c.lambda[j] = 0;
+      c.tangent[j].setZero();
+      continue;
+    }
+    // The friction impulse re-projected onto the current tangent plane, within the cone.
+    Vec3f t = c.tangent[j] - c.tangent[j].dot(n) * n;
+    const float limit = c.friction * c.lambda[j];
+    const float len = t.norm();
+    if (len > limit) t *= len > 0.0f ? limit / len : 0.0f;
+    c.tangent[j] = t;
+    const Vec3f J = c.lambda[j] * n + t;
+    applyImpulse(p, c.leverProbe, J, shareOf(p, blended), h, false);
+    applyImpulse(o, c.leverObstacle, -J, o.body ? shareOf(o, blended) : 0.0f, h, false);
+  }
+}
+
+// One visit of constraint A (blended) or B: normal impulse toward the target, then friction in
+// the tangent plane clamped to the cone of the accumulated normal impulse.
+void solveConstraint(const Side& p, const Side& o, ContactPoint& c, bool blended, float h) {
+  const Vec3f& rp = c.leverProbe;
+  const Vec3f& ro = c.leverObstacle;
+  const Vec3f& n = c.normal;
+  const int j = blended ? 0 : 1;
+  const float k = c.inverseMass[j][0];
+  if (!(k > 0.0f)) return;
+  const float sp = shareOf(p, blended), so = o.body ? shareOf(o, blended) : 0.0f;
+  float& lambda = c.lambda[j];
+  const float u = (measuredVelocity(p, rp, blended) - measuredVelocity(o, ro, blended)).dot(n);
+  // A never pushes harder than it takes to bring the particle itself to the target: where the
+  // body's rigid motion approaches but the particle does not (it is already being compressed),
+  // the blended measure would fling the light particle away.
+  float cap = std::numeric_limits<float>::infinity();
+  if (blended && c.pointInverseMass > 0.0f) {
+    const float up = (pointVelocity(p, rp) - pointVelocity(o, ro)).dot(n);
+    cap = std::max(lambda + (c.target - up) / c.pointInverseMass, 0.0f);
+  }
+  const float next = std::min(std::max(lambda + (c.target - u) / k, 0.0f), cap);
+  const float dl = next - lambda;
+  lambda = next;
+  if (dl != 0.0f) {
+    applyImpulse(p, rp, dl * n, sp, h, false);
+    applyImpulse(o, ro, -dl * n, so, h, false);
+  }
+  if (!(c.friction > 0.0f) || !(c.inverseMass[j][1] > 0.0f && c.inverseMass[j][2] > 0.0f))
+    return;
+  const Vec3f rel = measuredVelocity(p, rp, blended) - measuredVelocity(o, ro, blended);
+  Vec3f& tangent = c.tangent[j];
+  Vec3f next2 = tangent - (rel.dot(c.tangent1) / c.inverseMass[j][1]) * c.tangent1 -
+                (rel.dot(c.tangent2) / c.inverseMass[j][2]) * c.tangent2;
+  const float limit = c.friction * lambda;
+  const float len = next2.norm();
+  if (len > limit) next2 *= len > 0.0f ? limit / len : 0.0f;
+  const Vec3f dJ = next2 - tangent;
+  tangent = next2;
+  if (dJ.isZero()) return;
+  applyImpulse(p, rp, dJ, sp, h, false);
+  applyImpulse(o, ro, -dJ, so, h, false);
+}
+
+void solveContact(std::vector<SolverBody>& bodies, ContactPoint& c, float h) {
+  const Side p = probeSide(bodies, c), o = obstacleSide(bodies, c);
+  solveConstraint(p, o, c, true, h);
+  solveConstraint(p, o, c, false, h);
+}
+
+// Signed distance minus the gap at the current positions, rigid corrections included.
+float currentDistance(std::vector<SolverBody>& bodies, const ContactPoint& c,
+                      const std::vector<Collider>& colliders) {
+  const SolverBody& probe = bodies[size_t(c.probe)];
+  const Vec3f xp = correctedPosition(probe, c.particle);
+  if (c.obstacle < 0) {
+    Vec3 n;
+    return float(colliderDistance(colliders[size_t(c.collider)], xp.cast<double>(), &n));
+  }
+  const SolverBody& ob = bodies[size_t(c.obstacle)];
+  const mesh::Triangle& tri = (*ob.triangles)[size_t(c.triangle)];
+  Vec3f xo = Vec3f::Zero();
+  for (int k = 0; k < 3; ++k) xo += c.weights[k] * correctedPosition(ob, tri[size_t(k)]);
+  return (xp - xo).dot(c.normal) - ob.gap;
+}
+
+// Position-only push of what is still inside, at most maxPush metres.
+void pushOut(std::vector<SolverBody>& bodies, const ContactPoint& c, float distance) {
+  if (!(distance < 0.0f)) return;
+  const Side p = probeSide(bodies, c), o = obstacleSide(bodies, c);
+  const float spacing = p.body->spacing > 0.0f ? p.body->spacing : 0.05f;
+  const bool deep = distance < -kDeepRecovery * spacing;
+  auto shareFor = [&](const Side& s) {
+    return deep ? s.body->recoveryShare : s.body->rigidShare;
+  };
+  const Vec3f rp = leverArm(p), ro = leverArm(o);
+  auto kPos = [&](const Side& s, const Vec3f& r) {
+    if (!s.body || s.body->fixed()) return 0.0f;
+    const float sh = shareFor(s);
+    return (1.0f - sh) * localInverseMass(s) + sh * rigidInverseMass(*s.body, r, c.normal);
+  };
+  const float k = kPos(p, rp) + kPos(o, ro);
+  if (!(k > 0.0f)) return;
+  const float amount = std::min(-distance, kMaxPush * spacing);
+  applyImpulse(p, rp, (amount / k) * c.normal, shareFor(p), 0.0f, true);
+  if (o.body) applyImpulse(o, ro, (-amount / k) * c.normal, shareFor(o), 0.0f, true);
+}
+
+}  // namespace
+
+void prepareSolverBody(SolverBody& b) {
+  const RigidMotion rm = rigidMotion(PointColumns{{b.x[0], b.x[1], b.x[2]}},
+                                     PointColumns{{b.v[0], b.v[1], b.v[2]}}, b.mass, b.count);
+  b.centre = rm.centre.cast<float>();
+  b.invTotalMass = 1.0f / b.totalMass;
+  b.invInertia = rm.inverseInertia.cast<float>();
+  b.fitV = rm.velocity.cast<float>();
+  b.fitW = rm.omega.cast<float>();
+  b.deltaV = b.deltaW = b.shift = b.turn = Vec3f::Zero();
+  b.turnRotation.setIdentity();
+  b.frozen = false;
+  b.load = 0;
+}
+
+void finishSolverBody(SolverBody& b) {
+  if (b.shift.isZero() && b.turn.isZero() && b.deltaV.isZero() && b.deltaW.isZero()) return;
+  // About the centre of mass as it is now, after the particle shares moved it: then deltaW × r
+  // carries no linear momentum and the centre moves by exactly `shift`.
+  const Vec3f centre =
+      centreOfMass(PointColumns{{b.x[0], b.x[1], b.x[2]}}, b.mass, b.count).cast<float>();
+  const Eigen::Matrix3f R = rotationOf(b.turn);
+  for (int i = 0; i < b.count; ++i) {
+    if (b.invMass[i] == 0.0f) continue;  // pinned (a pinned body has no rigid share anyway)
+    const Vec3f r = b.position(i) - centre;
+    const Vec3f x = centre + b.shift + R * r;
+    const Vec3f dv = b.deltaV + b.deltaW.cross(r);
+    for (int a = 0; a < 3; ++a) {
+      b.x[a][i] = x[a];
+      b.v[a][i] += dv[a];
+    }
+  }
+  b.deltaV = b.deltaW = b.shift = b.turn = Vec3f::Zero();
+  b.turnRotation.setIdentity();
+}
+
+void solveIsland(std::vector<SolverBody>& bodies, std::vector<ContactPoint>& points,
+                 const std::vector<int>& bodyList, const std::vector<int>& pointList,
+                 const std::vector<Collider>& colliders, const ContactSolverSettings& settings) {
+  const float h = settings.h;
+  for (int k : pointList) prepareContact(bodies, points[size_t(k)], settings);
+  for (int k : pointList) warmStart(bodies, points[size_t(k)], h);
+  for (int sweep = 0; sweep < kVelocitySweeps; ++sweep)
+    for (int k : pointList) solveContact(bodies, points[size_t(k)], h);
+
+  // Shock propagation, for islands resting on a static collider under gravity: bodies bottom-up
+  // along `up`; each body's contacts with what is below it (static colliders, bodies already
+  // done) are solved with that below immovable, then the body is frozen. A stack's load then
+  // reaches the floor in one pass instead of creeping down through the sweeps. (Mid-air
+  // collisions are left alone: the one-sided pass does not conserve momentum.)
+  bool grounded = false;
+  for (int k : pointList) grounded = grounded || points[size_t(k)].obstacle < 0;
+  if (grounded && !settings.up.isZero() && bodyList.size() > 1) {
+    std::vector<int> levels(bodyList);
+    std::sort(levels.begin(), levels.end(), [&](int a, int b) {
+      const float ha = bodies[size_t(a)].centre.dot(settings.up);
+      const float hb = bodies[size_t(b)].centre.dot(settings.up);
+      return ha != hb ? ha < hb : a < b;
+    });
+    // Each contact goes with the higher of its two bodies (static contacts with their body).
+    std::vector<int> rank(bodies.size(), -1);
+    for (size_t r = 0; r < levels.size(); ++r) rank[size_t(levels[r])] = int(r);
+    std::vector<std::vector<int>> atLevel(levels.size());
+    for (int k : pointList) {
+      const ContactPoint& c = points[size_t(k)];
+      const int rp = rank[size_t(c.probe)];
+      const int ro = c.obstacle >= 0 ? rank[size_t(c.obstacle)] : -1;
+      atLevel[size_t(std::max(rp, ro))].push_back(k);
+    }
+    for (size_t level = 0; level < levels.size(); ++level) {
+      SolverBody& body = bodies[size_t(levels[level])];
+      if (!atLevel[level].empty()) {
+        // Effective masses with what is below frozen.
+        for (int k : atLevel[level]) {
+          ContactPoint& c = points[size_t(k)];
+          computeInverseMasses(probeSide(bodies, c), obstacleSide(bodies, c), c);
+        }
+        for (int k : atLevel[level]) solveContact(bodies, points[size_t(k)], h);
+      }
+      body.frozen = true;
+    }
+    for (int b : bodyList) bodies[size_t(b)].frozen = false;
+  }
+
+  // What is still inside is pushed out without velocity, at a bounded rate.
+  for (int b : bodyList) bodies[size_t(b)].turnRotation = rotationOf(bodies[size_t(b)].turn);
+  for (int sweep = 0; sweep < kPositionSweeps; ++sweep)
+    for (int k : pointList) {
+      const ContactPoint& c = points[size_t(k)];
+      pushOut(bodies, c, currentDistance(bodies, c, colliders));
+    }
+  for (int k : pointList) {
+    const ContactPoint& c = points[size_t(k)];
+    const float load = c.lambda[0] + c.lambda[1];
+    // (Immovable bodies are shared between islands: not written.)
+    if (!bodies[size_t(c.probe)].immovable) bodies[size_t(c.probe)].load += load;
+    if (c.obstacle >= 0 && !bodies[size_t(c.obstacle)].immovable)
+      bodies[size_t(c.obstacle)].load += load;
+  }
+}
+
+}  // namespace sb

@@ -1,0 +1,129 @@
+// The contact solve of a sub-step (docs/design.md §5.5): every contact, body–body and static,
+// in one velocity-level solve whose positions follow its velocities.
+//
+// Why this form (each point fixes a measured cause of energy gain or drift, issue 11):
+// - Every velocity change Δv moves the positions by h·Δv, as the integration would have
+//   (x_{n+1} = x_n + h·v_{n+1}); a position push without the matching velocity was free work.
+//   The velocity target lets a particle approach until it touches at the end of the sub-step
+//   (speculative contact); one already inside is stopped, not thrown out. What is still inside
+//   afterwards is pushed out without velocity, at a bounded rate (at most kMaxPush spacings per
+//   sweep), so recovery cannot launch a body.
+// - Each contact is two constraints that can only remove energy, because each measures the
+//   velocity its own impulse distribution acts on (the impulse is M⁻¹Cᵀλ of the row C it
+//   measures): A, split between the particle (1 − s) and the body's rigid motion (s, as a rigid
+//   body with the body's mass and inertia), measures (1 − s)·v_p + s·(V + ω × r) with V, ω the
+//   momentum-fitted rigid velocity; B measures the particle alone and acts on it alone. Rigid
+//   bodies (s = 1) answer B as a whole too, so they stay rigid.
+// - Impulses are accumulated over the sweeps and clamped as totals (λ ≥ 0, friction within
+//   μ·λ): clamping each visit apart let the first-visited contacts take all the load, the body
+//   rocked in particle order and friction turned the rocking into a walk. Warm started from the
+//   previous sub-step, so a resting body's contact forces are there from the first sweep.
+// - The rigid share is applied as a true rotation about the centre of mass after the particle
+//   shares moved it: linear momentum exact to round-off, rigid bodies rigid at any step.
+// - Shock propagation: after the sweeps, islands that rest on a static collider are solved once
+//   more bottom-up, each body with everything below it immovable, so a stack's load reaches the
+//   floor in one pass.
+#pragma once
+
+#include <vector>
+
+#include "sim/base/types.h"
+#include "sim/mesh/closed_surface.h"
+#include "sim/world/collider.h"
+
+namespace sb {
+
+// One body in the solve: views into the World's arrays and its response as a whole.
+struct SolverBody {
+  float* x[3] = {nullptr, nullptr, nullptr};  // position columns (#P each), metres
+  float* v[3] = {nullptr, nullptr, nullptr};  // velocity columns (#P each), m/s
+  const float* mass = nullptr;                // kg per particle
+  const float* invMass = nullptr;  // 1/kg per particle; 0 for pinned particles (immovable)
+  int count = 0;                   // #P
+  const std::vector<mesh::Triangle>* triangles = nullptr;  // surface (when an obstacle)
+  float gap = 0;      // metres: separation its surface keeps (when an obstacle)
+  float spacing = 0;  // metres: the surface spacing, scale of the position recovery
+  // Share of constraint A taken by the rigid motion, in [0, 1] (the World uses α; 0 for bodies
+  // with pinned particles); share 1 also answers B as a whole.
+  float rigidShare = 0;
+  // Share of deep-penetration pushes taken as a whole: 1, or 0 for pinned bodies.
+  float recoveryShare = 1;
+  bool immovable = false;  // a sleeping body: an obstacle that does not move this sub-step
+  bool frozen = false;     // shock propagation: immovable while set
+
+  // Set by prepareSolverBody: centre of mass (m), mass (kg), 1/mass, inverse inertia about the
+  // centre (world axes, pseudo-inverse), and the momentum-fitted rigid velocity (m/s, rad/s),
+  // kept current by every impulse of the solve.
+  Vec3f centre = Vec3f::Zero();
+  float totalMass = 0, invTotalMass = 0;
+  Eigen::Matrix3f invInertia = Eigen::Matrix3f::Zero();
+  Vec3f fitV = Vec3f::Zero(), fitW = Vec3f::Zero();
+  // Rigid corrections gathered by the solve, applied by finishSolverBody: velocity change (m/s,
+  // rad/s) and position change (translation m, rotation vector rad, its rotation matrix).
+  Vec3f deltaV = Vec3f::Zero(), deltaW = Vec3f::Zero();
+  Vec3f shift = Vec3f::Zero(), turn = Vec3f::Zero();
+  Eigen::Matrix3f turnRotation = Eigen::Matrix3f::Identity();
+  // Sum of the normal impulses the body took in this sub-step (N·s): it carried load.
+  float load = 0;
+
+  Vec3f position(int i) const { return Vec3f(x[0][i], x[1][i], x[2][i]); }
+  Vec3f velocity(int i) const { return Vec3f(v[0][i], v[1][i], v[2][i]); }
+  bool fixed() const { return immovable || frozen; }
+};
+
+// Centre, mass, inertia and fitted rigid velocity from the body's current state; clears the
+// gathered corrections.
+void prepareSolverBody(SolverBody& body);
+
+// Applies the gathered rigid corrections about the centre of mass as it is now (after the
+// particle shares moved it): x = c + shift + R(turn)(x − c), v += deltaV + deltaW × (x − c).
+void finishSolverBody(SolverBody& body);
+
+// The particle's position including the gathered rigid corrections (metres).
+inline Vec3f correctedPosition(const SolverBody& body, int particle) {
+  return body.centre + body.shift + body.turnRotation * (body.position(particle) - body.centre);
+}
+
+// One contact: particle `particle` of body `probe` against a triangle of body `obstacle`, or
+// against collider `collider` (obstacle = −1). Bodies are indices into the solve's body list.
+struct ContactPoint {
+  int probe = 0, obstacle = -1;
+  int particle = 0;
+  int triangle = -1;              // the obstacle's triangle (body contacts)
+  int collider = -1;              // static contacts
+  Vec3f weights = Vec3f::Zero();  // on the triangle
+  Vec3f normal = Vec3f::Zero();   // unit, out of the obstacle
+  float distance0 = 0;  // signed distance minus the gap, at detection (m; < 0: inside)
+  float friction = 0;     // μ
+  float restitution = 0;  // e in [0, 1]
+  // Accumulated impulses (N·s) of constraints A [0] and B [1]: normal (≥ 0) and friction (a
+  // vector in the tangent plane, within μ times the normal one). Set before the solve to warm
+  // start it; read afterwards to warm start the next sub-step.
+  float lambda[2] = {0, 0};
+  Vec3f tangent[2] = {Vec3f::Zero(), Vec3f::Zero()};
+
+  // Fixed for the sub-step by the solve: the relative normal velocity aimed at (m/s), lever
+  // arms from the bodies' centres, a tangent basis, and the effective inverse masses of A and
+  // B along n, t1, t2; pointInverseMass: how far the particle itself moves per unit impulse of A.
+  float target = 0;
+  Vec3f leverProbe = Vec3f::Zero(), leverObstacle = Vec3f::Zero();
+  Vec3f tangent1 = Vec3f::Zero(), tangent2 = Vec3f::Zero();
+  float inverseMass[2][3] = {{0, 0, 0}, {0, 0, 0}};
+  float pointInverseMass = 0;
+};
+
+struct ContactSolverSettings {
+  float h = 0;                        // sub-step (s)
+  float restitutionThreshold = 1.0f;  // m/s: slower approaches do not bounce
+  Vec3f up = Vec3f::UnitY();          // against gravity (shock propagation order); zero: none
+};
+
+// Solves one island: the bodies `bodyList` (indices into bodies, prepared) and the contacts
+// `pointList` (indices into points, in the order they are swept) that join them. Islands share
+// no body, so they may be solved in parallel. Changes the bodies' velocities and positions
+// (the rigid corrections stay gathered until finishSolverBody) and the points' impulses.
+void solveIsland(std::vector<SolverBody>& bodies, std::vector<ContactPoint>& points,
+                 const std::vector<int>& bodyList, const std::vector<int>& pointList,
+                 const std::vector<Collider>& colliders, const ContactSolverSettings& settings);
+
+}  // namespace sb

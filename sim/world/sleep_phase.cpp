@@ -1,0 +1,76 @@
+#include "sim/world/sleep_phase.h"
+
+namespace sb {
+
+namespace {
+
+int findRoot(std::vector<int>& parent, int i) {
+  while (parent[size_t(i)] != i) {
+    parent[size_t(i)] = parent[size_t(parent[size_t(i)])];
+    i = parent[size_t(i)];
+  }
+  return i;
+}
+
+}  // namespace
+
+bool runSleepPhase(double h, bool enabled, std::vector<BodySlot>& slots,
+                   const std::vector<int>& awake,
+                   const std::vector<std::pair<int, int>>& touching,
+                   const std::vector<char>& held, SleepScratch& scratch) {
+  bool candidate = false;
+  for (int s : awake) {
+    BodySlot& b = slots[size_t(s)];
+    const float limit = b.model->sleepSpeed;
+    const float fastest2 = b.state.v.rowwise().squaredNorm().maxCoeff();
+    if (fastest2 < limit * limit && !held[size_t(s)]) {
+      b.sleep.still += h;
+    } else {
+      b.sleep.still = 0;
+    }
+    candidate = candidate || b.sleep.still >= kTimeToSleep;
+  }
+  if (!enabled || !candidate) return false;
+  // Islands of awake bodies: an island sleeps only as a whole.
+  std::vector<int>& parent = scratch.parent;
+  parent.resize(slots.size());
+  for (int s : awake) parent[size_t(s)] = s;
+  for (const auto& [a, b] : touching) {
+    if (slots[size_t(a)].sleep.asleep || slots[size_t(b)].sleep.asleep) continue;
+    const int ra = findRoot(parent, a), rb = findRoot(parent, b);
+    if (ra != rb) parent[size_t(std::max(ra, rb))] = std::min(ra, rb);
+  }
+  // An island is ready when its least still body is: mark the roots of islands that are not.
+  std::vector<char> notReady(slots.size(), 0);
+  for (int s : awake)
+    if (slots[size_t(s)].sleep.still < kTimeToSleep) notReady[size_t(findRoot(parent, s))] = 1;
+  bool fell = false;
+  std::vector<int> islandId(slots.size(), -1);
+  for (int s : awake) {
+    const int root = findRoot(parent, s);
+    if (notReady[size_t(root)]) continue;
+    if (islandId[size_t(root)] < 0) islandId[size_t(root)] = scratch.nextIsland++;
+    BodySlot& b = slots[size_t(s)];
+    b.sleep.asleep = true;
+    b.sleep.island = islandId[size_t(root)];
+    b.state.v.setZero();
+    fell = true;
+  }
+  return fell;
+}
+
+bool wakeIsland(std::vector<BodySlot>& slots, const std::vector<int>& order, int s) {
+  BodySlot& b = slots[size_t(s)];
+  if (!b.sleep.asleep) {
+    b.sleep.still = 0;
+    return false;
+  }
+  const int island = b.sleep.island;
+  for (int o : order) {
+    SleepState& other = slots[size_t(o)].sleep;
+    if (other.asleep && other.island == island) other = SleepState{};
+  }
+  return true;
+}
+
+}  // namespace sb
