@@ -174,6 +174,7 @@ Collider parseCollider(Fields& f) {
   } else {
     f.fail("type", "must be plane, box, sphere or capsule, got '" + type + "'");
   }
+  c.restitution = f.number("restitution", c.restitution, limits::restitution);
   f.rejectUnknown();
   return c;
 }
@@ -240,6 +241,7 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMe
   def.params.beta = f.number("beta", def.params.beta, limits::beta);
   def.params.preserveVolume = f.boolean("preserveVolume", def.params.preserveVolume);
   def.params.damping = f.number("damping", def.params.damping, limits::damping);
+  def.params.restitution = f.number("restitution", def.params.restitution, limits::restitution);
   sb.contact = f.boolean("contact", true);
   if (f.has("plasticity")) {
     Fields p(f.raw("plasticity"), f.where("plasticity"), f.file());
@@ -444,6 +446,9 @@ Scene parseScene(const std::string& text, const std::string& name, const std::st
     settings.bodyContact = w.boolean("bodyContact", settings.bodyContact);
     settings.contactFriction =
         w.number("contactFriction", settings.contactFriction, limits::friction);
+    settings.restitutionThreshold = w.number("restitutionThreshold", settings.restitutionThreshold,
+                                             limits::restitutionThreshold);
+    settings.sleep = w.boolean("sleep", settings.sleep);
     w.rejectUnknown();
   }
   Scene scene;
@@ -519,10 +524,14 @@ void saveScene(const Scene& scene, const std::string& path) {
                    {"timeStep", w.settings().timeStep},
                    {"substeps", w.settings().substeps},
                    {"bodyContact", w.settings().bodyContact},
-                   {"contactFriction", w.settings().contactFriction}};
+                   {"contactFriction", w.settings().contactFriction},
+                   {"restitutionThreshold", w.settings().restitutionThreshold},
+                   {"sleep", w.settings().sleep}};
   json colliders = json::array();
   for (const Collider& c : w.colliders()) {
-    json j = {{"type", colliderShapeName(c.shape)}, {"friction", c.friction}};
+    json j = {{"type", colliderShapeName(c.shape)},
+              {"friction", c.friction},
+              {"restitution", c.restitution}};
     switch (c.shape) {
       case Collider::Shape::Plane:
         j["normal"] = vec(c.normal);
@@ -561,6 +570,7 @@ void saveScene(const Scene& scene, const std::string& path) {
               {"beta", p.beta},
               {"preserveVolume", p.preserveVolume},
               {"damping", p.damping},
+              {"restitution", p.restitution},
               {"contact", b.contact},
               {"plasticity",
                {{"yield", p.plasticity.yield},

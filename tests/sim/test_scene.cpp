@@ -81,6 +81,10 @@ TEST(Scene, ErrorsNameFileFieldAndReason) {
   expectSceneError(R"({"world": {"substeps": 0}, "bodies": []})",
                    "world.substeps: must be in [1, 1000]");
   expectSceneError(R"({"colliders": [{"type": "cone"}], "bodies": []})", "colliders[0].type");
+  expectSceneError(R"({"colliders": [{"type": "plane", "restitution": 1.5}], "bodies": []})",
+                   "colliders[0].restitution: must be in [0, 1], got 1.5");
+  expectSceneError(body(R"(, "restitution": -0.1)"), "bodies[0].restitution: must be in [0, 1]");
+  expectSceneError(R"({"world": {"sleep": 1}, "bodies": []})", "world.sleep");
   expectSceneError(R"({"bodies": [{"mesh": "/no/such/mesh.obj"}]})",
                    "bodies[0].mesh: /no/such/mesh.obj");
   // A render mesh needs a valid closed cage; a mesh with no faces cannot be one.
@@ -99,9 +103,12 @@ TEST(Scene, SaveRoundTripsParametersAtomically) {
   p.mode = Mode::Linear;
   p.alpha = 0.123;
   p.plasticity = {0.2, 0.7, 0.3};
+  p.restitution = 0.45;
   scene.world.setParams(h, p);
   WorldSettings s = scene.world.settings();
   s.substeps = 7;
+  s.sleep = false;
+  s.restitutionThreshold = 0.25;
   scene.world.setSettings(s);
   const fs::path dir = fs::temp_directory_path() / "softbody_save_test" / "sub";
   fs::create_directories(dir);
@@ -115,6 +122,9 @@ TEST(Scene, SaveRoundTripsParametersAtomically) {
   EXPECT_DOUBLE_EQ(q.alpha, 0.123);
   EXPECT_DOUBLE_EQ(q.plasticity.creep, 0.7);
   EXPECT_EQ(back.world.settings().substeps, 7);
+  EXPECT_DOUBLE_EQ(q.restitution, 0.45);
+  EXPECT_FALSE(back.world.settings().sleep);
+  EXPECT_DOUBLE_EQ(back.world.settings().restitutionThreshold, 0.25);
   EXPECT_EQ(back.world.clusterCount(back.bodies[1].handle),
             scene.world.clusterCount(scene.bodies[1].handle));
   // A failed save leaves the existing file as it was.
@@ -128,6 +138,17 @@ TEST(Scene, SaveRoundTripsParametersAtomically) {
     return std::string(std::istreambuf_iterator<char>(in), {});
   }();
   EXPECT_EQ(before, after);
+}
+
+TEST(Scene, RestitutionAndSleepAreReadFromTheFile) {
+  const Scene scene = parseScene(
+      R"({"world": {"sleep": false, "restitutionThreshold": 0.5},
+          "colliders": [{"type": "plane", "restitution": 0.8}], "bodies": []})",
+      "inline", ".");
+  EXPECT_FALSE(scene.world.settings().sleep);
+  EXPECT_DOUBLE_EQ(scene.world.settings().restitutionThreshold, 0.5);
+  ASSERT_EQ(scene.world.colliders().size(), 1u);
+  EXPECT_DOUBLE_EQ(scene.world.colliders()[0].restitution, 0.8);
 }
 
 TEST(Scene, MissingFileIsAClearError) {
