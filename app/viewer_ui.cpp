@@ -157,6 +157,9 @@ void ViewerApp::drawWorldPanel() {
   if (sliderDouble("body friction", &s.contactFriction, 0.0f, 2.0f, "%.2f",
                    "Friction coefficient mu between bodies."))
     changed = true;
+  if (ImGui::Checkbox("sleep", &s.sleep)) changed = true;
+  tooltip("Bodies at rest fall asleep and skip the step until something wakes them\n"
+          "(a touch by an awake body, a drag, a parameter change).");
   if (changed) {
     try {
       world.setSettings(s);
@@ -226,6 +229,10 @@ void ViewerApp::drawBodyPanel(int body) {
         sliderDouble("damping", &p.damping, 0.0f, 1.0f, "%.3f",
                      "Damping per sub-step of the velocity relative to the body's rigid motion\n"
                      "(pinned bodies: the motion their pins allow, so a swing comes to rest).");
+    changed |= sliderDouble("restitution", &p.restitution, 0.0f, 1.0f, "%.2f",
+                            "Share of the approach speed an impact gives back (0 = no bounce);\n"
+                            "a contact uses the larger of its two sides'. Rigid bodies rebound\n"
+                            "e^2 of their fall height; soft bodies do not follow it yet.");
     changed |= sliderDouble("c_yield", &p.plasticity.yield, 0.0f, 1.0f, "%.3f",
                             "Plastic yield: stretch ||S - I|| above which the rest shape creeps.");
     changed |= sliderDouble("c_creep", &p.plasticity.creep, 0.0f, 20.0f, "%.2f",
