@@ -360,7 +360,8 @@ void wakeForever(Scene& scene) {
   scene.world.setSettings(s);
 }
 
-// Edge of a box-shaped body: the largest extent of its rest positions.
+// Edge of a box-shaped body placed axis-aligned: the largest extent of its rest positions (more
+// than the edge for a tilted box; the slope test uses it only as a loose bound).
 double restEdge(const Scene& scene, int body) {
   const Eigen::MatrixX3d x =
       scene.world.restPositions(scene.bodies[size_t(body)].handle).cast<double>();
