@@ -410,8 +410,12 @@ TEST(Determinism, BitIdenticalAcrossRunsAndThreadCounts) {
   const std::uint64_t one = run(1), again = run(1), two = run(2);
   EXPECT_EQ(one, again);
   EXPECT_EQ(one, two);
-  // Golden value: changes only when the simulation's arithmetic changes on purpose.
+  // Golden value: changes only when the simulation's arithmetic changes on purpose. It is the
+  // GCC build's (the compiler of every shipped build); the clang build (the ThreadSanitizer
+  // stage) differs in the last bits, so there only the equalities above are checked.
+#ifndef __clang__
   EXPECT_EQ(one, 0xccb6ddefe33d29f9ULL) << std::hex << one;
+#endif
 }
 
 }  // namespace
