@@ -24,14 +24,6 @@ elif [ "${SOFTBODY_TSAN:-0}" = 1 ]; then
   # The Xvfb viewer tests are built but not run here: they time real frames, which TSan's
   # slowdown turns into timeouts; the viewer's threads are the same pool as everywhere else.
   labels=(-LE "soak|viewer")
-  # Known clang-only failures, not data races (TSan reports none). Grossly: the batched cluster
-  # kernel (sim/world/matching/cluster_batch.cpp, compiled with -mavx under clang, see its
-  # CMakeLists) disagrees with the general path under clang 14 by far more than round-off
-  # (0.76 against a 3.6e-5 tolerance): to be found and fixed in the kernel. Slightly: momentum
-  # conservation and two scene tests miss margins tuned on GCC's results (angular momentum
-  # 0.0037 against 0.0036), maybe as a consequence. Until then these run in the GCC builds only.
-  # The golden hash is GCC's (test_dynamics.cpp).
-  labels+=(-E "ClusterBatch.MatchesTheGeneralPathInEveryBatchedMode|Contact.TwoBodyCollisionConservesMomentumAndSeparates|ShippedScenes.ClustersMakeTheSameBodyFloppier|Momentum.ConservedWithoutExternalForces")
 else
   dir="$root/build/test"; flags=(-DCMAKE_BUILD_TYPE=RelWithDebInfo)
 fi

@@ -79,7 +79,9 @@ SoakResult soak(int steps, unsigned seed, int warmUp) {
       std::sort(d.particles.begin(), d.particles.end());
       d.particles.erase(std::unique(d.particles.begin(), d.particles.end()), d.particles.end());
       d.weights.resize(d.particles.size(), 1.0 / double(d.particles.size()));
-      d.target = w.centreOfMass(h) + Vec3(uniform(-0.5, 0.5), uniform(0, 1), uniform(-0.5, 0.5));
+      // Drawn last component first, as GCC evaluated Vec3(uniform(), ...) (tests/draws.h).
+      const double tz = uniform(-0.5, 0.5), ty = uniform(0, 1), tx = uniform(-0.5, 0.5);
+      d.target = w.centreOfMass(h) + Vec3(tx, ty, tz);
       d.stiffness = uniform(0.05, 1.0);
       drags.push_back(w.addDrag(d));
     } else if (action == 1 && !drags.empty()) {
@@ -103,7 +105,8 @@ SoakResult soak(int steps, unsigned seed, int warmUp) {
       handles[size_t(body)] = w.addBody(defs[size_t(body)]);
     } else if (action == 5 && s % 7 == 0) {
       WorldSettings ws = w.settings();
-      ws.gravity = Vec3(uniform(-1, 1), -uniform(5, 15), uniform(-1, 1));
+      const double gz = uniform(-1, 1), gy = -uniform(5, 15), gx = uniform(-1, 1);
+      ws.gravity = Vec3(gx, gy, gz);
       ws.contactFriction = uniform(0, 1.5);
       w.setSettings(ws);
     }
