@@ -4,7 +4,8 @@
 #   SOFTBODY_SANITIZE=1  builds into build/sanitize with AddressSanitizer + UBSan instead;
 #   SOFTBODY_TSAN=1      builds everything (library, app with viewer, tests) with clang and
 #                        ThreadSanitizer into build/tsan, warnings as errors (the second
-#                        compiler), and runs all but the viewer and soak tests;
+#                        compiler: CI's one clang build of everything), and runs all but the
+#                        viewer and soak tests; the results, golden hash included, are GCC's;
 #   SOFTBODY_SOAK=1      also runs the soak tests (CTest label "soak", ~6 min; CI does).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
