@@ -1,5 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages softbody needs, and only those that are missing.
+# clang (with its sanitizer runtimes, libFuzzer and OpenMP) builds the TSan and fuzz stages of CI;
+# clang-format checks the formatting (scripts/check-format.sh).
 # Safe to run repeatedly; needs root (or sudo) only when something is missing.
 set -euo pipefail
 packages=(
@@ -7,6 +9,7 @@ packages=(
   libglfw3-dev libglm-dev libimgui-dev libeigen3-dev
   libstb-dev nlohmann-json3-dev libcli11-dev
   xvfb xauth libgl1-mesa-dri mesa-utils x11-apps imagemagick xdotool
+  clang clang-format libclang-rt-14-dev libfuzzer-14-dev libomp-14-dev
 )
 missing=()
 for p in "${packages[@]}"; do

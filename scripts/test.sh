@@ -1,18 +1,33 @@
 #!/usr/bin/env bash
 # One command to build and run the whole test suite: installs missing packages, builds
-# (Release with assertions on) and runs every test with CTest.
-# SOFTBODY_SANITIZE=1 builds into build/sanitize with AddressSanitizer + UBSan instead.
+# (RelWithDebInfo: optimised, assertions on) and runs every test with CTest.
+#   SOFTBODY_SANITIZE=1  builds into build/sanitize with AddressSanitizer + UBSan instead;
+#   SOFTBODY_TSAN=1      builds everything (library, app with viewer, tests) with clang and
+#                        ThreadSanitizer into build/tsan, warnings as errors (the second
+#                        compiler: CI's one clang build of everything), and runs all but the
+#                        viewer and soak tests; the results, golden hash included, are GCC's;
+#   SOFTBODY_SOAK=1      also runs the soak tests (CTest label "soak", ~6 min; CI does).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 "$root/scripts/install-deps.sh"
+labels=(-LE soak)
+[ "${SOFTBODY_SOAK:-0}" = 1 ] && labels=()
 if [ "${SOFTBODY_SANITIZE:-0}" = 1 ]; then
   dir="$root/build/sanitize"; flags=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DSOFTBODY_SANITIZE=ON)
   export ASAN_OPTIONS="abort_on_error=1:detect_leaks=1"
   export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
   export LSAN_OPTIONS="suppressions=$root/scripts/lsan.supp:print_suppressions=0"
+elif [ "${SOFTBODY_TSAN:-0}" = 1 ]; then
+  dir="$root/build/tsan"
+  flags=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DSOFTBODY_TSAN=ON
+         -DCMAKE_CXX_COMPILER=clang++)
+  export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:history_size=4"
+  # The Xvfb viewer tests are built but not run here: they time real frames, which TSan's
+  # slowdown turns into timeouts; the viewer's threads are the same pool as everywhere else.
+  labels=(-LE "soak|viewer")
 else
   dir="$root/build/test"; flags=(-DCMAKE_BUILD_TYPE=RelWithDebInfo)
 fi
 cmake -S "$root" -B "$dir" "${flags[@]}" >/dev/null
 cmake --build "$dir" -j"$(nproc)"
-cd "$dir" && ctest --output-on-failure -j"$(nproc)" --timeout 600
+cd "$dir" && ctest --output-on-failure -j"$(nproc)" --timeout 2400 "${labels[@]}"

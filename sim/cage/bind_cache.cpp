@@ -250,8 +250,12 @@ Embedding Embedding::fromBytes(const std::string& data, const std::string& path,
     std::vector<Eigen::Triplet<double>> trips;
     trips.reserve(static_cast<std::size_t>(nnz));
     if (outer[0] != 0 || outer[static_cast<std::size_t>(rows)] != nnz) throw std::runtime_error(path + ": bad row offsets");
-    for (std::int64_t r = 0; r < rows; ++r) {
+    // All offsets checked before any is used: non-decreasing from 0 to nnz keeps every one in
+    // [0, nnz] (checked row by row inside the loop below, a large offset early on read past
+    // `inner` before the later, smaller one was seen).
+    for (std::int64_t r = 0; r < rows; ++r)
       if (outer[r + 1] < outer[r]) throw std::runtime_error(path + ": bad row offsets");
+    for (std::int64_t r = 0; r < rows; ++r) {
       for (std::int64_t q = outer[r]; q < outer[r + 1]; ++q) {
         const int c = inner[static_cast<std::size_t>(q)];
         if (c < 0 || c >= cols) throw std::runtime_error(path + ": column index out of range");

@@ -11,6 +11,7 @@
 #include "sim/world/matching/cluster_batch.h"
 #include "sim/base/parallel.h"
 #include "sim/world/world.h"
+#include "tests/draws.h"
 
 namespace sb {
 namespace {
@@ -134,10 +135,11 @@ void BM_SmallClusterKernel(benchmark::State& state) {
   std::vector<float> memberRest[3], memberWeight;
   std::vector<Eigen::Quaternionf> warm;
   for (int c = 0; c < clusters; ++c) {
-    Eigen::Quaterniond q(g(rng), g(rng), g(rng), g(rng));
+    Eigen::Quaterniond q = test::drawQuaternion([&] { return g(rng); });
     q.normalize();
-    const Mat3 F = q.toRotationMatrix() *
-                   Vec3(stretch(rng), stretch(rng), stretch(rng)).asDiagonal().toDenseMatrix();
+    const Mat3 F =
+        q.toRotationMatrix() *
+        test::drawVector<Vec3>([&] { return stretch(rng); }).asDiagonal().toDenseMatrix();
     const int* list = &members[size_t(memberStart[size_t(c)])];
     restModels.push_back(
         buildClusterRest(list, 4, r[0].data(), r[1].data(), r[2].data(), w.data()));
@@ -151,7 +153,7 @@ void BM_SmallClusterKernel(benchmark::State& state) {
       memberWeight.push_back(1.0f);
     }
     const Eigen::Quaterniond nudge(
-        Eigen::AngleAxisd(0.03, Vec3(g(rng), g(rng), g(rng)).normalized()));
+        Eigen::AngleAxisd(0.03, test::drawVector<Vec3>([&] { return g(rng); }).normalized()));
     warm.push_back((nudge * q).cast<float>());
   }
   const float* memberRestCols[3] = {memberRest[0].data(), memberRest[1].data(),

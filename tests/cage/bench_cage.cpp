@@ -17,6 +17,7 @@
 #include "sim/cage/mvc.h"
 #include "sim/mesh/normals.h"
 #include "tests/mesh/mesh_fixtures.h"
+#include "tests/draws.h"
 
 namespace {
 
@@ -28,7 +29,8 @@ std::vector<Vec3> randomPointsInBox(int n, const Vec3& lo, const Vec3& hi, unsig
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> U(0.0, 1.0);
   std::vector<Vec3> p(n);
-  for (auto& x : p) x = lo + (hi - lo).cwiseProduct(Vec3(U(rng), U(rng), U(rng)));
+  for (auto& x : p)
+    x = lo + (hi - lo).cwiseProduct(sb::test::drawVector<Vec3>([&] { return U(rng); }));
   return p;
 }
 

@@ -18,6 +18,7 @@
 #include "sim/mesh/mesh_io.h"
 #include "sim/mesh/normals.h"
 #include "tests/mesh/mesh_fixtures.h"
+#include "tests/draws.h"
 #include "tests/support/temp_dir_test.h"
 
 namespace sb::cage {
@@ -161,7 +162,7 @@ TEST(Bind, AutoStorageRule) {
   std::vector<Vec3> pts;
   std::mt19937 rng(1);
   std::uniform_real_distribution<double> U(0.05, 0.95);
-  for (int i = 0; i < 40; ++i) pts.emplace_back(U(rng), U(rng), U(rng));
+  for (int i = 0; i < 40; ++i) pts.push_back(test::drawVector<Vec3>([&] { return U(rng); }));
   BindOptions o;
   o.pruneThreshold = 0.1;
   const Embedding b = bindMeanValue(pts, box, o);

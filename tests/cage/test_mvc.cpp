@@ -13,6 +13,7 @@
 #include "sim/mesh/mesh_io.h"
 #include "sim/cage/mvc.h"
 #include "tests/mesh/mesh_fixtures.h"
+#include "tests/draws.h"
 
 namespace sb::cage {
 using namespace sb::mesh;  // meshes, mesh files, surfaces
@@ -124,7 +125,8 @@ TEST(Mvc, InteriorPartitionOfUnityAndLinearPrecision) {
     std::uniform_real_distribution<double> U(0.0, 1.0);
     int tested = 0;
     for (int k = 0; k < 4000 && tested < 150; ++k) {
-      const Vec3 x = box.min() + box.sizes().cwiseProduct(Vec3(U(rng), U(rng), U(rng)));
+      const Vec3 x =
+          box.min() + box.sizes().cwiseProduct(test::drawVector<Vec3>([&] { return U(rng); }));
       if (!insideNamed(c.name, x)) continue;
       ++tested;
       const Eval e = evalAt(mc, x);
@@ -148,7 +150,7 @@ TEST(Mvc, MatchesIndependentJswFormulaAtGenericPoints) {
     int tested = 0;
     for (int k = 0; k < 3000 && tested < 40; ++k) {
       // inside and outside, but at least 2% of L from every face plane (where JSW is accurate)
-      const Vec3 x = centre + 0.8 * L * Vec3(U(rng), U(rng), U(rng));
+      const Vec3 x = centre + 0.8 * L * test::drawVector<Vec3>([&] { return U(rng); });
       bool clear = true;
       for (const auto& t : c.cage.triangles) {
         const Vec3 n = (c.cage.vertices[t[1]] - c.cage.vertices[t[0]]).cross(c.cage.vertices[t[2]] - c.cage.vertices[t[0]]).normalized();
@@ -345,7 +347,8 @@ TEST(Mvc, ExteriorPointsUpToFourTimesTheCageSize) {
     const double L = diagonal(c.cage);
     for (double dist : {0.75, 1.0, 2.0, 4.0}) {
       for (int k = 0; k < 20; ++k) {
-        const Vec3 x = box.center() + dist * L * Vec3(N(rng), N(rng), N(rng)).normalized();
+        const Vec3 x =
+            box.center() + dist * L * test::drawVector<Vec3>([&] { return N(rng); }).normalized();
         const Eval e = evalAt(mc, x);
         const auto [sumErr, linErr] = errors(c.cage, e.w, x);
         EXPECT_LT(sumErr, 1e-8) << c.name << " at " << dist;
@@ -362,7 +365,9 @@ TEST(Mvc, FarAwayPointsAreFlaggedWithTheirAccuracy) {
     const MeanValueCage mc(c.cage);
     for (double dist : {3.9, 10.0, 30.0, 100.0, 1000.0}) {
       for (int k = 0; k < 10; ++k) {
-        const Vec3 x = mc.centre() + dist * mc.diagonal() * Vec3(N(rng), N(rng), N(rng)).normalized();
+        const Vec3 x = mc.centre() + dist * mc.diagonal() * test::drawVector<Vec3>([&] {
+                                                              return N(rng);
+                                                            }).normalized();
         const Eval e = evalAt(mc, x);
         EXPECT_NEAR(e.info.distance, dist, 1e-9 * dist);
         EXPECT_EQ(e.info.far, dist > 4.0);
@@ -461,7 +466,7 @@ TEST(Mvc, NearCageFuzzStaysFiniteAndAccurate) {
       }
       const Vec3 base = it % 3 == 0 ? a : it % 3 == 1 ? Vec3(a + r1 * (b - a)) : Vec3(a + r1 * (b - a) + r2 * (d - a));
       const double dist = std::pow(10.0, -6.0 - static_cast<double>(rng() % 11)) * L;
-      Vec3 dir = Vec3(N(rng), N(rng), N(rng));
+      Vec3 dir = test::drawVector<Vec3>([&] { return N(rng); });
       const int mode = static_cast<int>(rng() % 3);
       if (mode == 0) dir = n;
       else if (mode == 1) dir = -n;

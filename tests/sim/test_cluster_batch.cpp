@@ -11,6 +11,7 @@
 #include "sim/world/matching/shape_matching.h"
 #include "test_util.h"
 #include "tet_bar.h"
+#include "tests/draws.h"
 
 namespace sb {
 namespace {
@@ -39,7 +40,7 @@ SmallClusters makeClusters(int count, unsigned seed) {
   s.particles = 80;
   const Mat3 spin = test::randomRotation(rng);
   for (int i = 0; i < s.particles; ++i) {
-    const Vec3 r(u(rng), u(rng), u(rng));
+    const Vec3 r = test::drawVector<Vec3>([&] { return u(rng); });
     const Vec3 bent(r.x() + 0.3 * r.y() * r.y(), 0.8 * r.y() + 0.2 * r.x() * r.z(), 1.2 * r.z());
     const Vec3 x = spin * bent + Vec3(5.0, -2.0, 1.0);
     for (int a = 0; a < 3; ++a) {
@@ -74,8 +75,9 @@ SmallClusters makeClusters(int count, unsigned seed) {
     const int first = list.front();
     s.ref.emplace_back(s.x[0][size_t(first)], s.x[1][size_t(first)], s.x[2][size_t(first)]);
     const Eigen::Quaterniond exact(spin);
-    const Eigen::Quaterniond nudge(
-        Eigen::AngleAxisd(0.3 * std::abs(u(rng)), Vec3(u(rng), u(rng), u(rng)).normalized()));
+    const Vec3 axis = test::drawVector<Vec3>([&] { return u(rng); });  // drawn before the angle
+    const double angle = 0.3 * std::abs(u(rng));
+    const Eigen::Quaterniond nudge(Eigen::AngleAxisd(angle, axis.normalized()));
     s.warm.push_back(nudge * exact);
   }
   return s;

@@ -18,6 +18,7 @@
 
 #include <cstring>
 #include <random>
+#include "tests/draws.h"
 
 namespace sb {
 namespace {
@@ -57,7 +58,7 @@ TEST(ClusterBatchTargets, BaselineAndDispatchedKernelGiveTheSameBits) {
         shape.s0[a][l] = 0.1f * u(rng);
         lanes.ref[a][l] = 0.2f * u(rng);
       }
-      Eigen::Vector4f q(u(rng), u(rng), u(rng), u(rng));
+      Eigen::Vector4f q = test::drawVector<Eigen::Vector4f>([&] { return u(rng); });
       q.normalize();
       for (int k = 0; k < 4; ++k) lanes.rotation[k][l] = q[k];
     }

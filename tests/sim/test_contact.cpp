@@ -132,7 +132,7 @@ Vec3 totalMomentum(const World& w) {
 TEST(SurfaceGeometry, ClosestPointMatchesExactDistance) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<float> u(-1, 1);
-  auto rnd = [&] { return Vec3f(u(rng), u(rng), u(rng)); };
+  auto rnd = [&] { return test::drawVector<Vec3f>([&] { return u(rng); }); };
   for (int trial = 0; trial < 20000; ++trial) {
     Vec3f a = rnd(), b = rnd(), c = rnd();
     if (trial % 5 == 0) c = a + 0.999f * (b - a) + 1e-3f * rnd();  // needle triangles
@@ -173,9 +173,10 @@ TEST(SurfaceGeometry, PseudoNormalSideAgreesWithWindingNumber) {
   std::normal_distribution<double> g(0.0, 0.01);
   int inside = 0, tested = 0;
   for (int trial = 0; trial < 3000; ++trial) {
-    Vec3 p(u(rng), u(rng), u(rng));
+    Vec3 p = test::drawVector<Vec3>([&] { return u(rng); });
     if (trial % 2) {  // half of the points within about a centimetre of a random vertex
-      p = s.points[size_t(trial) % s.points.size()] + Vec3(g(rng), g(rng), g(rng));
+      p = s.points[size_t(trial) % s.points.size()] +
+          test::drawVector<Vec3>([&] { return g(rng); });
     }
     const double w = windingNumber(p, xd, s.triangles);
     if (std::abs(std::abs(w) - 0.5) < 0.05) continue;  // on the surface: no defined side
@@ -220,7 +221,8 @@ TEST(SurfaceGrid, CellHoldsEveryTriangleWithinReach) {
     std::mt19937 rng(7);
     std::uniform_real_distribution<float> u(0, 1);
     for (int trial = 0; trial < 2000; ++trial) {
-      const Vec3f p = region.min() + Vec3f(u(rng), u(rng), u(rng)).cwiseProduct(region.sizes());
+      const Vec3f p = region.min() +
+                      test::drawVector<Vec3f>([&] { return u(rng); }).cwiseProduct(region.sizes());
       const SurfaceGrid::Range r = grid.candidates(p);
       const std::vector<int> got(r.begin, r.end);
       ASSERT_TRUE(std::is_sorted(got.begin(), got.end()));

@@ -38,7 +38,8 @@ Body gridBody() {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const Mat3 F = test::randomRotation(rng) * Vec3(1.1, 0.9, 1.0).asDiagonal().toDenseMatrix();
   for (int i = 0; i < b.n; ++i) {
-    const Vec3 x = F * rest[size_t(i)] + Vec3(100, -50, 20) + 1e-3 * Vec3(u(rng), u(rng), u(rng));
+    const Vec3 x = F * rest[size_t(i)] + Vec3(100, -50, 20) +
+                   1e-3 * test::drawVector<Vec3>([&] { return u(rng); });
     for (int a = 0; a < 3; ++a) {
       b.r[a].push_back(float(rest[size_t(i)][a]));
       b.x[a].push_back(float(x[a]));

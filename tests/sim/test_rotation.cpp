@@ -27,7 +27,7 @@ TEST(Rotation, MatchesSvdOnRandomDeformations) {
   for (int k = 0; k < 500; ++k) {
     const Mat3 R0 = test::randomRotation(rng);
     const Mat3 Q = test::randomRotation(rng);
-    const Mat3 S = Q * Vec3(u(rng), u(rng), u(rng)).asDiagonal() * Q.transpose();
+    const Mat3 S = Q * test::drawVector<Vec3>([&] { return u(rng); }).asDiagonal() * Q.transpose();
     const Mat3 A = R0 * S;
     const Eigen::Quaterniond warm(test::randomRotation(rng));
     const Mat3 R = closestRotation(A, warm).matrix();
@@ -76,8 +76,9 @@ TEST(Rotation, DegenerateInputs) {
   std::mt19937 rng(4);
   std::normal_distribution<double> g;
   for (int k = 0; k < 200; ++k) {
-    const Vec3 a(g(rng), g(rng), g(rng)), b(g(rng), g(rng), g(rng)), c(g(rng), g(rng), g(rng)),
-        d(g(rng), g(rng), g(rng));
+    auto draw = [&] { return g(rng); };
+    const Vec3 a = test::drawVector<Vec3>(draw), b = test::drawVector<Vec3>(draw),
+               c = test::drawVector<Vec3>(draw), d = test::drawVector<Vec3>(draw);
     const Mat3 planar = a * b.transpose() + c * d.transpose();  // rank 2
     const Mat3 collinear = a * b.transpose();                   // rank 1
     const Eigen::Quaterniond warm(test::randomRotation(rng));

@@ -7,6 +7,7 @@
 #include "sim/world/matching/cluster_layout.h"
 #include "sim/world/matching/cluster_rest.h"
 #include "sim/world/matching/shape_matching.h"
+#include "tests/draws.h"
 #include "test_util.h"
 
 namespace sb {
@@ -67,7 +68,7 @@ TEST(ShapeMatching, LinearWithBetaZeroEqualsRigid) {
     BodyDef linear = gridBody(Mode::Linear, clustered);
     linear.params.beta = 0.0;
     Eigen::MatrixX3d x = toMatrix(rigid.positions);
-    for (int i = 0; i < x.rows(); ++i) x.row(i) += Eigen::RowVector3d(u(rng), u(rng), u(rng));
+    for (int i = 0; i < x.rows(); ++i) x.row(i) += test::drawVector<Eigen::RowVector3d>([&] { return u(rng); });
     EXPECT_LT(relError(goalsFor(linear, x), goalsFor(rigid, x)), 1e-6) << clustered;
   }
 }
@@ -80,7 +81,7 @@ TEST(ShapeMatching, LinearReproducesAnyAffineMap) {
       Mat3 A = Mat3::Identity();
       for (int i = 0; i < 9; ++i) A(i / 3, i % 3) += u(rng);
       if (A.determinant() < 0.1) continue;
-      const Vec3 t(u(rng), u(rng), u(rng));
+      const Vec3 t = test::drawVector<Vec3>([&] { return u(rng); });
       const BodyDef def = gridBody(Mode::Linear, clustered);
       const Eigen::MatrixX3d x = applyAffine(def.positions, A, t);
       EXPECT_LT(relError(goalsFor(def, x), betaOneGoals(def, x, x)), 2e-6)
@@ -119,7 +120,7 @@ TEST(ShapeMatching, QuadraticReproducesAnyQuadraticMap) {
       for (int i = 0; i < 9; ++i) A(i / 3, i % 3) += 0.5 * u(rng);
       Eigen::Matrix<double, 3, 6> Q;
       for (int i = 0; i < 18; ++i) Q(i / 6, i % 6) = u(rng);
-      const Vec3 t(u(rng), u(rng), u(rng));
+      const Vec3 t = test::drawVector<Vec3>([&] { return u(rng); });
       const BodyDef def = gridBody(Mode::Quadratic, clustered);
       Eigen::MatrixX3d x(static_cast<int>(def.positions.size()), 3);
       for (size_t i = 0; i < def.positions.size(); ++i)
@@ -158,7 +159,7 @@ TEST(ClusterRest, MonomialMapTransformsQuadraticTerms) {
   for (int k = 0; k < 20; ++k) {
     Mat3 S;
     for (int i = 0; i < 9; ++i) S(i / 3, i % 3) = g(rng);
-    const Vec3 q(g(rng), g(rng), g(rng));
+    const Vec3 q = test::drawVector<Vec3>([&] { return g(rng); });
     EXPECT_LT((monomialMap(S) * monomials<double>(q) - monomials<double>(Vec3(S * q))).norm(),
               1e-12 * (1 + (S * q).squaredNorm()));
   }

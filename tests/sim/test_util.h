@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "sim/world/world.h"
+#include "tests/draws.h"
 
 namespace sb::test {
 
@@ -17,16 +18,17 @@ inline std::vector<Vec3> jitteredGrid(int n, double size, const Vec3& centre, un
   const double step = size / (n - 1);
   for (int k = 0; k < n; ++k)
     for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i)
-        out.push_back(centre + step * Vec3(i + jitter(rng) - 0.5 * (n - 1),
-                                           j + jitter(rng) - 0.5 * (n - 1),
-                                           k + jitter(rng) - 0.5 * (n - 1)));
+      for (int i = 0; i < n; ++i) {
+        const Vec3 d = drawVector<Vec3>([&] { return jitter(rng); });  // tests/draws.h
+        out.push_back(centre + step * Vec3(i + d.x() - 0.5 * (n - 1), j + d.y() - 0.5 * (n - 1),
+                                           k + d.z() - 0.5 * (n - 1)));
+      }
   return out;
 }
 
 inline Mat3 randomRotation(std::mt19937& rng) {
   std::normal_distribution<double> g;
-  Eigen::Quaterniond q(g(rng), g(rng), g(rng), g(rng));
+  Eigen::Quaterniond q = drawQuaternion([&] { return g(rng); });
   q.normalize();
   return q.toRotationMatrix();
 }
