@@ -13,8 +13,8 @@
 
 #include "app/commands.h"
 #include "sim/base/parallel.h"
-#include "sim/mesh/closed_surface.h"
 #include "sim/cage/embedding.h"
+#include "sim/mesh/closed_surface.h"
 #include "sim/mesh/mesh_io.h"
 #include "sim/mesh/triangle_mesh.h"
 
@@ -41,19 +41,23 @@ int parse(CLI::App& app, int argc, char** argv) {
   return -1;
 }
 
-BindOptions makeOptions(const std::string& cacheDir, int threads, const std::string& storage, double prune,
-                        bool progress) {
+BindOptions makeOptions(const std::string& cacheDir, int threads, const std::string& storage,
+                        double prune, bool progress) {
   BindOptions o;
   o.cacheDir = cacheDir;
   if (threads > 0) setThreadCount(threads);  // the pool the bind runs on (sim/base/parallel.h)
   o.threads = threads;
   o.pruneThreshold = prune;
-  if (storage == "dense") o.storage = cage::WeightStorage::Dense;
-  else if (storage == "sparse") o.storage = cage::WeightStorage::Sparse;
-  else o.storage = cage::WeightStorage::Auto;
+  if (storage == "dense")
+    o.storage = cage::WeightStorage::Dense;
+  else if (storage == "sparse")
+    o.storage = cage::WeightStorage::Sparse;
+  else
+    o.storage = cage::WeightStorage::Auto;
   o.warning = [](const std::string& m) { std::fprintf(stderr, "warning: %s\n", m.c_str()); };
   if (progress) {
-    auto last = std::make_shared<std::chrono::steady_clock::time_point>(std::chrono::steady_clock::now());
+    auto last =
+        std::make_shared<std::chrono::steady_clock::time_point>(std::chrono::steady_clock::now());
     o.progress = [last](std::size_t done, std::size_t total) {
       const auto now = std::chrono::steady_clock::now();
       if (done == total || now - *last > std::chrono::milliseconds(500)) {
@@ -68,25 +72,32 @@ BindOptions makeOptions(const std::string& cacheDir, int threads, const std::str
   return o;
 }
 
-void addCommonOptions(CLI::App& app, std::string& cacheDir, int& threads, std::string& storage, double& prune) {
-  app.add_option("--cache-dir", cacheDir, "Directory for cached binds (reused when mesh, cage and options match)");
-  app.add_option("--threads", threads, "Threads for the bind (0 = all cores)")->check(CLI::Range(0, 1024));
+void addCommonOptions(CLI::App& app, std::string& cacheDir, int& threads, std::string& storage,
+                      double& prune) {
+  app.add_option("--cache-dir", cacheDir,
+                 "Directory for cached binds (reused when mesh, cage and options match)");
+  app.add_option("--threads", threads, "Threads for the bind (0 = all cores)")
+      ->check(CLI::Range(0, 1024));
   app.add_option("--storage", storage, "Weight storage: auto, dense or sparse")
       ->check(CLI::IsMember({"auto", "dense", "sparse"}));
-  app.add_option("--prune", prune, "Sparse pruning: fraction of each row's absolute weight mass that may be dropped")
+  app.add_option("--prune", prune,
+                 "Sparse pruning: fraction of each row's absolute weight mass that may be dropped")
       ->check(CLI::Range(0.0, 0.5));
 }
 
 }  // namespace
 
 int runBindCommand(int argc, char** argv) {
-  CLI::App app{"Bind a mesh to a cage with mean value coordinates and report weight statistics", "bind"};
+  CLI::App app{"Bind a mesh to a cage with mean value coordinates and report weight statistics",
+               "bind"};
   std::string meshPath, cagePath, outPath, cacheDir, storage = "auto";
   int threads = 0;
   double prune = BindOptions{}.pruneThreshold;
-  app.add_option("--mesh", meshPath, "Mesh whose vertices are bound (OBJ, OFF, PLY, STL)")->required();
+  app.add_option("--mesh", meshPath, "Mesh whose vertices are bound (OBJ, OFF, PLY, STL)")
+      ->required();
   app.add_option("--cage", cagePath, "Closed, outward-oriented cage mesh")->required();
-  app.add_option("--out", outPath, "Write the weight matrix (binary .sbw file, see sim/cage/README.md)");
+  app.add_option("--out", outPath,
+                 "Write the weight matrix (binary .sbw file, see sim/cage/README.md)");
   addCommonOptions(app, cacheDir, threads, storage, prune);
   if (const int rc = parse(app, argc, argv); rc >= 0) return rc;
 
@@ -103,23 +114,29 @@ int runBindCommand(int argc, char** argv) {
     const Embedding emb = cage::bindMeanValue(mesh.vertices, cageMesh, options);
     const cage::BindStats& s = emb.stats();
     std::printf("mesh:               %s (%d vertices)\n", meshPath.c_str(), emb.meshVertexCount());
-    std::printf("cage:               %s (%d vertices, %zu triangles)\n", cagePath.c_str(), emb.cageVertexCount(),
-                cageMesh.triangles.size());
-    if (s.fromCache) std::printf("time:               cached (%s)\n", cacheDir.c_str());
-    else std::printf("time:               %.3f s on %d thread(s)\n", s.seconds, s.threads);
-    std::printf("storage:            %s, %lld nonzeros (%.1f%%)\n", emb.isSparse() ? "sparse" : "dense",
-                static_cast<long long>(emb.nonZeros()),
-                100.0 * static_cast<double>(emb.nonZeros()) /
-                    std::max(1.0, static_cast<double>(emb.meshVertexCount()) * emb.cageVertexCount()));
+    std::printf("cage:               %s (%d vertices, %zu triangles)\n", cagePath.c_str(),
+                emb.cageVertexCount(), cageMesh.triangles.size());
+    if (s.fromCache)
+      std::printf("time:               cached (%s)\n", cacheDir.c_str());
+    else
+      std::printf("time:               %.3f s on %d thread(s)\n", s.seconds, s.threads);
+    std::printf(
+        "storage:            %s, %lld nonzeros (%.1f%%)\n", emb.isSparse() ? "sparse" : "dense",
+        static_cast<long long>(emb.nonZeros()),
+        100.0 * static_cast<double>(emb.nonZeros()) /
+            std::max(1.0, static_cast<double>(emb.meshVertexCount()) * emb.cageVertexCount()));
     std::printf("weights:            min %.6g, max %.6g, %lld negative\n", s.minWeight, s.maxWeight,
                 static_cast<long long>(s.negativeCount));
     std::printf("sum error:          %.3g (max |sum w - 1|)\n", s.maxSumError);
     std::printf("linear precision:   %.3g (max |sum w v - x| / cage diagonal)\n", s.maxLinearError);
     if (emb.isSparse())
-      std::printf("pruning:            rest-pose error %.3g, max row L1 change %.3g\n", s.pruningError, s.maxPrunedL1);
-    std::printf("conditioning:       %.3g (worst cancellation factor), %lld points beyond 4x cage size, "
-                "%lld on the cage\n",
-                s.worstConditioning, static_cast<long long>(s.farPoints), static_cast<long long>(s.onCagePoints));
+      std::printf("pruning:            rest-pose error %.3g, max row L1 change %.3g\n",
+                  s.pruningError, s.maxPrunedL1);
+    std::printf(
+        "conditioning:       %.3g (worst cancellation factor), %lld points beyond 4x cage size, "
+        "%lld on the cage\n",
+        s.worstConditioning, static_cast<long long>(s.farPoints),
+        static_cast<long long>(s.onCagePoints));
     if (!outPath.empty()) {
       emb.save(outPath);
       std::printf("wrote:              %s\n", outPath.c_str());
@@ -142,7 +159,9 @@ int runDeformCommand(int argc, char** argv) {
   double prune = BindOptions{}.pruneThreshold;
   app.add_option("--mesh", meshPath, "Mesh to deform (faces optional)")->required();
   app.add_option("--cage", cagePath, "Cage in the rest pose")->required();
-  app.add_option("--deformed-cage", deformedPath, "The same cage, moved (same vertex count and faces)")->required();
+  app.add_option("--deformed-cage", deformedPath,
+                 "The same cage, moved (same vertex count and faces)")
+      ->required();
   app.add_option("--out", outPath, "Output OBJ")->required();
   addCommonOptions(app, cacheDir, threads, storage, prune);
   if (const int rc = parse(app, argc, argv); rc >= 0) return rc;
@@ -152,8 +171,9 @@ int runDeformCommand(int argc, char** argv) {
     const TriangleMesh rest = mesh::readMesh(cagePath);
     const TriangleMesh moved = mesh::readMesh(deformedPath);
     if (moved.vertices.size() != rest.vertices.size()) {
-      std::fprintf(stderr, "deform: %s: has %zu vertices but the cage %s has %zu\n", deformedPath.c_str(),
-                   moved.vertices.size(), cagePath.c_str(), rest.vertices.size());
+      std::fprintf(stderr, "deform: %s: has %zu vertices but the cage %s has %zu\n",
+                   deformedPath.c_str(), moved.vertices.size(), cagePath.c_str(),
+                   rest.vertices.size());
       return 1;
     }
     if (moved.triangles != rest.triangles) {
@@ -161,7 +181,8 @@ int runDeformCommand(int argc, char** argv) {
       while (first < moved.triangles.size() && first < rest.triangles.size() &&
              moved.triangles[first] == rest.triangles[first])
         ++first;
-      std::fprintf(stderr, "deform: %s: faces differ from the cage %s (first difference at face %zu)\n",
+      std::fprintf(stderr,
+                   "deform: %s: faces differ from the cage %s (first difference at face %zu)\n",
                    deformedPath.c_str(), cagePath.c_str(), first);
       return 1;
     }
@@ -171,19 +192,24 @@ int runDeformCommand(int argc, char** argv) {
       std::fprintf(stderr, "deform: %s\n", e.what());
       return 1;
     }
-    const BindOptions options = makeOptions(cacheDir, threads, storage, prune, mesh.vertices.size() > 20000);
+    const BindOptions options =
+        makeOptions(cacheDir, threads, storage, prune, mesh.vertices.size() > 20000);
     const Embedding emb = cage::bindMeanValue(mesh.vertices, rest, options);
     PointsRowMajor cagePos(static_cast<Eigen::Index>(moved.vertices.size()), 3);
-    Eigen::Matrix<double, Eigen::Dynamic, 3> cageD(static_cast<Eigen::Index>(moved.vertices.size()), 3);
-    for (std::size_t j = 0; j < moved.vertices.size(); ++j) cageD.row(static_cast<Eigen::Index>(j)) = moved.vertices[j].transpose();
+    Eigen::Matrix<double, Eigen::Dynamic, 3> cageD(static_cast<Eigen::Index>(moved.vertices.size()),
+                                                   3);
+    for (std::size_t j = 0; j < moved.vertices.size(); ++j)
+      cageD.row(static_cast<Eigen::Index>(j)) = moved.vertices[j].transpose();
     Eigen::Matrix<double, Eigen::Dynamic, 3> outD;
     emb.deformDouble(cageD, outD);  // double precision for the file; the per-frame path is float
     TriangleMesh out;
     out.triangles = mesh.triangles;
     out.vertices.resize(mesh.vertices.size());
-    for (std::size_t i = 0; i < out.vertices.size(); ++i) out.vertices[i] = outD.row(static_cast<Eigen::Index>(i)).transpose();
+    for (std::size_t i = 0; i < out.vertices.size(); ++i)
+      out.vertices[i] = outD.row(static_cast<Eigen::Index>(i)).transpose();
     mesh::writeObj(outPath, out);
-    std::printf("wrote %s (%zu vertices, %zu triangles)\n", outPath.c_str(), out.vertices.size(), out.triangles.size());
+    std::printf("wrote %s (%zu vertices, %zu triangles)\n", outPath.c_str(), out.vertices.size(),
+                out.triangles.size());
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "deform: %s\n", e.what());

@@ -55,8 +55,9 @@ class RunMonitor {
       if (k < startRadius_.size() && startRadius_[k] > 0)
         growth = std::max(growth, radius(b) / startRadius_[k] - 1.0);
     }
-    std::printf("  t %8.3f s  kinetic %11.5g J  fastest %10.4g m/s  growth %+8.3f %%  contacts %d\n",
-                world_.time(), energy, fastest, 100.0 * growth, contacts);
+    std::printf(
+        "  t %8.3f s  kinetic %11.5g J  fastest %10.4g m/s  growth %+8.3f %%  contacts %d\n",
+        world_.time(), energy, fastest, 100.0 * growth, contacts);
   }
 
  private:

@@ -20,8 +20,8 @@ int runViewerHeadless(Scene& scene, const ViewerOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   for (int s = 0; s < steps; ++s)
     runner.step([&](const WorldEvent& e) {
-      std::printf("  event: %s: %s\n", world.contains(e.body) ? world.name(e.body).c_str() : "world",
-                  e.message.c_str());
+      std::printf("  event: %s: %s\n",
+                  world.contains(e.body) ? world.name(e.body).c_str() : "world", e.message.c_str());
     });
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

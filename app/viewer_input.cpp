@@ -26,7 +26,9 @@ ViewerApp* appOf(GLFWwindow* window) {
   return static_cast<ViewerApp*>(glfwGetWindowUserPointer(window));
 }
 
-bool imguiWantsMouse() { return ImGui::GetCurrentContext() && ImGui::GetIO().WantCaptureMouse; }
+bool imguiWantsMouse() {
+  return ImGui::GetCurrentContext() && ImGui::GetIO().WantCaptureMouse;
+}
 bool imguiWantsKeyboard() {
   return ImGui::GetCurrentContext() && ImGui::GetIO().WantCaptureKeyboard;
 }
@@ -40,12 +42,10 @@ void ViewerApp::installCallbacks() {
   glfwSetMouseButtonCallback(window_, [](GLFWwindow* w, int button, int action, int mods) {
     appOf(w)->onMouseButton(button, action, mods);
   });
-  glfwSetCursorPosCallback(window_, [](GLFWwindow* w, double x, double y) {
-    appOf(w)->onCursorPos(x, y);
-  });
-  glfwSetScrollCallback(window_, [](GLFWwindow* w, double dx, double dy) {
-    appOf(w)->onScroll(dx, dy);
-  });
+  glfwSetCursorPosCallback(window_,
+                           [](GLFWwindow* w, double x, double y) { appOf(w)->onCursorPos(x, y); });
+  glfwSetScrollCallback(window_,
+                        [](GLFWwindow* w, double dx, double dy) { appOf(w)->onScroll(dx, dy); });
   glfwSetKeyCallback(window_, [](GLFWwindow* w, int key, int, int action, int mods) {
     appOf(w)->onKey(key, action, mods);
   });
@@ -94,8 +94,10 @@ void ViewerApp::onMouseButton(int button, int action, int mods) {
   if (button == GLFW_MOUSE_BUTTON_LEFT) {
     beginDrag(x, y, (mods & GLFW_MOD_CONTROL) != 0);
   } else if (button == GLFW_MOUSE_BUTTON_RIGHT) {
-    if (mods & GLFW_MOD_SHIFT) panning_ = true;
-    else orbiting_ = true;
+    if (mods & GLFW_MOD_SHIFT)
+      panning_ = true;
+    else
+      orbiting_ = true;
   } else if (button == GLFW_MOUSE_BUTTON_MIDDLE) {
     panning_ = true;
   }
@@ -146,19 +148,32 @@ void ViewerApp::onKey(int key, int action, int mods) {
     case GLFW_KEY_G:
       if (press) showGoals_ = !showGoals_;
       break;
-    case GLFW_KEY_LEFT: camera_.orbit(-15.0f, 0.0f); break;
-    case GLFW_KEY_RIGHT: camera_.orbit(15.0f, 0.0f); break;
-    case GLFW_KEY_UP: camera_.orbit(0.0f, 15.0f); break;
-    case GLFW_KEY_DOWN: camera_.orbit(0.0f, -15.0f); break;
+    case GLFW_KEY_LEFT:
+      camera_.orbit(-15.0f, 0.0f);
+      break;
+    case GLFW_KEY_RIGHT:
+      camera_.orbit(15.0f, 0.0f);
+      break;
+    case GLFW_KEY_UP:
+      camera_.orbit(0.0f, 15.0f);
+      break;
+    case GLFW_KEY_DOWN:
+      camera_.orbit(0.0f, -15.0f);
+      break;
     case GLFW_KEY_EQUAL:
-    case GLFW_KEY_KP_ADD: camera_.zoom(0.9f); break;
+    case GLFW_KEY_KP_ADD:
+      camera_.zoom(0.9f);
+      break;
     case GLFW_KEY_MINUS:
-    case GLFW_KEY_KP_SUBTRACT: camera_.zoom(1.0f / 0.9f); break;
+    case GLFW_KEY_KP_SUBTRACT:
+      camera_.zoom(1.0f / 0.9f);
+      break;
     case GLFW_KEY_ESCAPE:
     case GLFW_KEY_Q:
       if (press) glfwSetWindowShouldClose(window_, GLFW_TRUE);
       break;
-    default: break;
+    default:
+      break;
   }
 }
 
@@ -178,7 +193,8 @@ void ViewerApp::beginDrag(double x, double y, bool nearestParticle) {
         const glm::vec3 q(p(k, 0), p(k, 1), p(k, 2));
         glm::vec2 pixel;
         if (!projectToWindow(q, &pixel)) continue;
-        const float d = glm::length(pixel - glm::vec2(static_cast<float>(x), static_cast<float>(y)));
+        const float d =
+            glm::length(pixel - glm::vec2(static_cast<float>(x), static_cast<float>(y)));
         if (d < best) {
           best = d;
           drag.body = static_cast<int>(i);

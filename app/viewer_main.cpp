@@ -53,21 +53,22 @@ int runViewerCommand(int argc, char** argv) {
       "clusters, goals overlays, arrows orbit, +/- zoom, Esc/Q quit.\n"
       "Without a display the scene runs headless for --frames steps (300 by default).");
   cli.add_option("scene", options.scenePath, "scene file (JSON); default: the bundled scene");
-  cli.add_option("--frames", options.frames,
-                 "exit after N frames (headless: steps, default 300)")
+  cli.add_option("--frames", options.frames, "exit after N frames (headless: steps, default 300)")
       ->check(CLI::PositiveNumber);
   cli.add_option("--screenshot", options.screenshot,
                  "write a PNG of the last frame (of frame 120 without --frames)");
   cli.add_option("--stats", options.statsPath,
                  "write timings, body centres and screen bounds as JSON (at exit and every "
                  "--stats-every frames)");
-  cli.add_option("--stats-every", options.statsEvery, "rewrite the stats file every N frames (0: at exit only)")
+  cli.add_option("--stats-every", options.statsEvery,
+                 "rewrite the stats file every N frames (0: at exit only)")
       ->check(CLI::NonNegativeNumber);
   cli.add_option("--fps-cap", options.fpsCap, "frames per second at most (0: uncapped)")
       ->check(CLI::NonNegativeNumber);
   cli.add_option("--size", size, "window size WxH in pixels");
-  cli.add_option("--sim-threads", options.simThreads,
-                 "simulation threads (0: all cores); 1 by default, as llvmpipe renders on the same cores")
+  cli.add_option(
+         "--sim-threads", options.simThreads,
+         "simulation threads (0: all cores); 1 by default, as llvmpipe renders on the same cores")
       ->check(CLI::NonNegativeNumber);
   cli.add_option("--show", options.show,
                  "overlays to switch on, comma separated: particles,cage,clusters,goals")
@@ -87,7 +88,8 @@ int runViewerCommand(int argc, char** argv) {
   try {
     cli.parse(argc, argv);
     if (!parseSize(size, &options.width, &options.height))
-      throw CLI::ValidationError("--size", "expected WxH with 64 <= W, H <= 16384, got '" + size + "'");
+      throw CLI::ValidationError("--size",
+                                 "expected WxH with 64 <= W, H <= 16384, got '" + size + "'");
   } catch (const CLI::ParseError& e) {
     return cli.exit(e);
   }

@@ -9,8 +9,8 @@
 #include <nlohmann/json.hpp>
 
 #include "app/viewer_app.h"
-#include "sim/base/file_io.h"
 #include "render/picking.h"
+#include "sim/base/file_io.h"
 
 namespace sb::app {
 

@@ -158,8 +158,9 @@ void ViewerApp::drawWorldPanel() {
                    "Friction coefficient mu between bodies."))
     changed = true;
   if (ImGui::Checkbox("sleep", &s.sleep)) changed = true;
-  tooltip("Bodies at rest fall asleep and skip the step until something wakes them\n"
-          "(a touch by an awake body, a drag, a parameter change).");
+  tooltip(
+      "Bodies at rest fall asleep and skip the step until something wakes them\n"
+      "(a touch by an awake body, a drag, a parameter change).");
   if (changed) {
     try {
       world.setSettings(s);
@@ -264,8 +265,9 @@ void ViewerApp::drawBodyPanel(int body) {
       tooltip("One cluster with every particle: the body deforms only as a whole.");
       ImGui::SameLine();
       if (ImGui::RadioButton("grid", &kind, 1)) rebuild = true;
-      tooltip("Overlapping cubic cells over the rest shape: smaller cells = finer local detail\n"
-              "(the stiffness is alpha's and beta's at any number of clusters).");
+      tooltip(
+          "Overlapping cubic cells over the rest shape: smaller cells = finer local detail\n"
+          "(the stiffness is alpha's and beta's at any number of clusters).");
       clusters.kind = kind == 1 ? ClusterDef::Kind::Grid : ClusterDef::Kind::Single;
     }
     const glm::vec3 extent = v.boundsMax - v.boundsMin;

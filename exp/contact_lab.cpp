@@ -160,9 +160,9 @@ double kinetic(const World& w) {
   double e = 0;
   for (BodyHandle b : w.bodies()) {
     const Eigen::VectorXf m = w.masses(b);
-    e += 0.5 * (m.cast<double>().array() *
-                w.velocities(b).cast<double>().rowwise().squaredNorm().array())
-                   .sum();
+    e += 0.5 *
+         (m.cast<double>().array() * w.velocities(b).cast<double>().rowwise().squaredNorm().array())
+             .sum();
   }
   return e;
 }
@@ -219,8 +219,7 @@ double pairError(const World& w, BodyHandle b, const Eigen::MatrixX3d& rest) {
 }
 
 // Generalised winding number of p w.r.t. a closed surface.
-double winding(const Vec3& p, const Eigen::MatrixX3d& x,
-               const std::vector<std::array<int, 3>>& t) {
+double winding(const Vec3& p, const Eigen::MatrixX3d& x, const std::vector<std::array<int, 3>>& t) {
   double sum = 0;
   for (const auto& tri : t) {
     const Vec3 a = x.row(tri[0]).transpose() - p, b = x.row(tri[1]).transpose() - p,
@@ -370,9 +369,9 @@ int pile() {
     const std::string mode = num("allrigid", 0) > 0 ? "rigid" : modes[(i / 2) % 3];
     const double alpha = mode == "rigid" ? 1.0 : num("alpha", 0.5);
     const Mat3 R = rotXYZ(7 * i, 31 * i, 13 * i);
-    BodyDef d = makeBody(s, Vec3((col - 1) * (L + 0.05), 0.6 * L + layer * 1.15 * L,
-                                 0.05 * (i % 2)),
-                         R, mode, alpha, 0.5, damping, 1.0);
+    BodyDef d =
+        makeBody(s, Vec3((col - 1) * (L + 0.05), 0.6 * L + layer * 1.15 * L, 0.05 * (i % 2)), R,
+                 mode, alpha, 0.5, damping, 1.0);
     shapes.push_back(s);
     size0.push_back(rmsSize(w, w.addBody(d)));
   }
@@ -423,8 +422,8 @@ int rest() {
   w.addCollider(floorCollider(n));
   const Shape s = shapeOf(str("kind", "cube"), L);
   const Mat3 Rb = R * rotXYZ(num("rx", 0), num("ry", 0), num("rz", 0));
-  const double h = -minY(s, rotXYZ(num("rx", 0), num("ry", 0), num("rz", 0))) +
-                   num("lift", 0.0005 * L);
+  const double h =
+      -minY(s, rotXYZ(num("rx", 0), num("ry", 0), num("rz", 0))) + num("lift", 0.0005 * L);
   BodyDef d = makeBody(s, h * n, Rb, str("mode", "rigid"), num("alpha", 1), num("beta", 0),
                        num("damping", 0), num("mass", 1));
   BodyHandle b = w.addBody(d);
@@ -461,8 +460,8 @@ int stack() {
   double bottom = 0.001 * L - minY(s, Mat3::Identity());
   for (int i = 0; i < n; ++i) {
     BodyDef d = makeBody(s, Vec3(0, bottom + i * L * (1 + gapFrac), 0), Mat3::Identity(),
-                         str("mode", "rigid"), num("alpha", 1), num("beta", 0.2),
-                         num("damping", 0), num("mass", 1));
+                         str("mode", "rigid"), num("alpha", 1), num("beta", 0.2), num("damping", 0),
+                         num("mass", 1));
     hs.push_back(w.addBody(d));
   }
   std::vector<Vec3> c0;
@@ -476,9 +475,9 @@ int stack() {
     const Vec3 d = w.centreOfMass(hs.back()) - c0.back();
     worst = std::max(worst, std::hypot(d.x(), d.z()));
     if (k % every == 0 || k == steps) {
-      std::printf("%6.2f %10.4g (%.3f%% of L) %+.4g %10.4g %10.4g %d  dx %+.3g dz %+.3g",
-                  w.time(), std::hypot(d.x(), d.z()), 100 * std::hypot(d.x(), d.z()) / L, d.y(),
-                  maxSpeed(w), kinetic(w), sleepingCount(w), d.x(), d.z());
+      std::printf("%6.2f %10.4g (%.3f%% of L) %+.4g %10.4g %10.4g %d  dx %+.3g dz %+.3g", w.time(),
+                  std::hypot(d.x(), d.z()), 100 * std::hypot(d.x(), d.z()) / L, d.y(), maxSpeed(w),
+                  kinetic(w), sleepingCount(w), d.x(), d.z());
       if (num("all", 0) > 0)
         for (size_t i = 0; i < hs.size(); ++i) {
           const Vec3 di = w.centreOfMass(hs[i]) - c0[i];
@@ -490,8 +489,10 @@ int stack() {
   std::printf("top drift: end %.4g m (%.3f%% of L), worst %.4g m\n",
               std::hypot((w.centreOfMass(hs.back()) - c0.back()).x(),
                          (w.centreOfMass(hs.back()) - c0.back()).z()),
-              100 * std::hypot((w.centreOfMass(hs.back()) - c0.back()).x(),
-                               (w.centreOfMass(hs.back()) - c0.back()).z()) / L,
+              100 *
+                  std::hypot((w.centreOfMass(hs.back()) - c0.back()).x(),
+                             (w.centreOfMass(hs.back()) - c0.back()).z()) /
+                  L,
               worst);
   return 0;
 }
@@ -524,12 +525,12 @@ int drop() {
     if (rising) apex = std::max(apex, y);
     prevVy = vy;
     if (num("show", 0) > 0 && k % int(num("show", 1)) == 0)
-      std::printf("  t %.3f y %.4f vy %.3f maxSpeed %.3f size %.4f\n", w.time(), y, vy,
-                  maxSpeed(w), rmsSize(w, b));
+      std::printf("  t %.3f y %.4f vy %.3f maxSpeed %.3f size %.4f\n", w.time(), y, vy, maxSpeed(w),
+                  rmsSize(w, b));
     if (rising && vy < -0.05) break;  // falling again
   }
-  std::printf("impact speed %.3f m/s, apex after impact %.4f m, rebound ratio %.4f\n",
-              impactSpeed, rising ? apex : 0.0, rising ? apex / H : 0.0);
+  std::printf("impact speed %.3f m/s, apex after impact %.4f m, rebound ratio %.4f\n", impactSpeed,
+              rising ? apex : 0.0, rising ? apex / H : 0.0);
   return 0;
 }
 
@@ -544,8 +545,8 @@ int impact() {
   d.velocity = Vec3(num("vx", 1), -num("v0", 3), 0);
   BodyHandle b = w.addBody(d);
   if (num("two", 0) > 0) {
-    BodyDef e = makeBody(s, Vec3(0.3 * L, -minY(s, Mat3::Identity()), 0), Mat3::Identity(),
-                         "rigid", 1, 0, 0, 1);
+    BodyDef e = makeBody(s, Vec3(0.3 * L, -minY(s, Mat3::Identity()), 0), Mat3::Identity(), "rigid",
+                         1, 0, 0, 1);
     w.addBody(e);
   }
   const Eigen::MatrixX3d rest = w.positions(b).cast<double>();
@@ -638,8 +639,8 @@ int freeBody() {
   ws.gravity = Vec3::Zero();
   World w(ws);
   const Shape s = shapeOf(str("kind", "suzanne"), L);
-  BodyDef d = makeBody(s, Vec3::Zero(), Mat3::Identity(), str("mode", "linear"),
-                       num("alpha", 0.6), num("beta", 0.3), num("damping", 0), 1.0);
+  BodyDef d = makeBody(s, Vec3::Zero(), Mat3::Identity(), str("mode", "linear"), num("alpha", 0.6),
+                       num("beta", 0.3), num("damping", 0), 1.0);
   BodyHandle b = w.addBody(d);
   Eigen::MatrixX3d x = w.positions(b).cast<double>(), v = Eigen::MatrixX3d::Zero(x.rows(), 3);
   for (int i = 0; i < x.rows(); ++i) {

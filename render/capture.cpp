@@ -29,8 +29,7 @@ bool captureFramebufferToPng(int width, int height, const std::string& path, std
     std::memcpy(a, b, rowBytes);
     std::memcpy(b, row.data(), rowBytes);
   }
-  if (!stbi_write_png(path.c_str(), width, height, 3, pixels.data(),
-                      static_cast<int>(rowBytes))) {
+  if (!stbi_write_png(path.c_str(), width, height, 3, pixels.data(), static_cast<int>(rowBytes))) {
     if (error) *error = "cannot write " + path;
     return false;
   }

@@ -67,8 +67,10 @@ void DebugDraw::flush(const glm::mat4& viewProjection, float pointSize, bool dep
   shader_.use();
   shader_.set("uViewProjection", viewProjection);
   shader_.set("uPointSize", pointSize);
-  if (depthTest) glEnable(GL_DEPTH_TEST);
-  else glDisable(GL_DEPTH_TEST);
+  if (depthTest)
+    glEnable(GL_DEPTH_TEST);
+  else
+    glDisable(GL_DEPTH_TEST);
   glEnable(GL_PROGRAM_POINT_SIZE);
   glEnable(GL_BLEND);
   glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);

@@ -20,7 +20,9 @@ MeshBuffer::MeshBuffer() {
   glBindVertexArray(0);
 }
 
-MeshBuffer::~MeshBuffer() { release(); }
+MeshBuffer::~MeshBuffer() {
+  release();
+}
 
 void MeshBuffer::release() {
   if (vao_) glDeleteVertexArrays(1, &vao_);
@@ -67,11 +69,15 @@ void MeshBuffer::setVertices(const float* positions, const float* normals,
   const auto bytes = static_cast<GLsizeiptr>(vertexCount * 3 * sizeof(float));
   const bool grow = vertexCount > capacity_;
   glBindBuffer(GL_ARRAY_BUFFER, positions_);
-  if (grow) glBufferData(GL_ARRAY_BUFFER, bytes, positions, GL_DYNAMIC_DRAW);
-  else glBufferSubData(GL_ARRAY_BUFFER, 0, bytes, positions);
+  if (grow)
+    glBufferData(GL_ARRAY_BUFFER, bytes, positions, GL_DYNAMIC_DRAW);
+  else
+    glBufferSubData(GL_ARRAY_BUFFER, 0, bytes, positions);
   glBindBuffer(GL_ARRAY_BUFFER, normals_);
-  if (grow) glBufferData(GL_ARRAY_BUFFER, bytes, normals, GL_DYNAMIC_DRAW);
-  else glBufferSubData(GL_ARRAY_BUFFER, 0, bytes, normals);
+  if (grow)
+    glBufferData(GL_ARRAY_BUFFER, bytes, normals, GL_DYNAMIC_DRAW);
+  else
+    glBufferSubData(GL_ARRAY_BUFFER, 0, bytes, normals);
   glBindBuffer(GL_ARRAY_BUFFER, 0);
   if (grow) capacity_ = vertexCount;
   vertexCount_ = vertexCount;

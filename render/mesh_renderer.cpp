@@ -42,8 +42,7 @@ void main() {
 
 MeshRenderer::MeshRenderer() : shader_(kVertex, kFragment) {}
 
-void MeshRenderer::begin(const glm::mat4& view, const glm::mat4& projection,
-                         const glm::vec3& eye) {
+void MeshRenderer::begin(const glm::mat4& view, const glm::mat4& projection, const glm::vec3& eye) {
   shader_.use();
   shader_.set("uView", view);
   shader_.set("uProjection", projection);

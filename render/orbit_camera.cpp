@@ -13,15 +13,21 @@ glm::vec3 OrbitCamera::forward() const {
   return -glm::vec3(cp * std::sin(yaw), std::sin(pitch), cp * std::cos(yaw));
 }
 
-glm::vec3 OrbitCamera::eye() const { return target - distance * forward(); }
+glm::vec3 OrbitCamera::eye() const {
+  return target - distance * forward();
+}
 
 glm::vec3 OrbitCamera::right() const {
   return glm::normalize(glm::cross(forward(), glm::vec3(0.0f, 1.0f, 0.0f)));
 }
 
-glm::vec3 OrbitCamera::up() const { return glm::cross(right(), forward()); }
+glm::vec3 OrbitCamera::up() const {
+  return glm::cross(right(), forward());
+}
 
-glm::mat4 OrbitCamera::view() const { return glm::lookAt(eye(), target, up()); }
+glm::mat4 OrbitCamera::view() const {
+  return glm::lookAt(eye(), target, up());
+}
 
 glm::mat4 OrbitCamera::projection(float aspect) const {
   return glm::perspective(fovY, std::max(aspect, 1e-3f), nearPlane, farPlane);
@@ -65,7 +71,8 @@ Ray OrbitCamera::rayThroughPixel(float x, float y, float width, float height) co
 
 bool OrbitCamera::project(const glm::vec3& point, float width, float height,
                           glm::vec2* pixel) const {
-  const glm::vec4 clip = projection(width / std::max(height, 1.0f)) * view() * glm::vec4(point, 1.0f);
+  const glm::vec4 clip =
+      projection(width / std::max(height, 1.0f)) * view() * glm::vec4(point, 1.0f);
   if (clip.w <= 1e-6f) return false;
   const glm::vec3 ndc = glm::vec3(clip) / clip.w;
   *pixel = glm::vec2((ndc.x + 1.0f) * 0.5f * width, (1.0f - ndc.y) * 0.5f * height);

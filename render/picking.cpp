@@ -37,8 +37,7 @@ TriangleHit pickTriangles(const Ray& ray, const float* positions, std::size_t ve
   };
   for (std::size_t k = 0; k < triangleCount; ++k) {
     const std::int32_t* tri = triangles + 3 * k;
-    if (tri[0] < 0 || tri[1] < 0 || tri[2] < 0 ||
-        static_cast<std::size_t>(tri[0]) >= vertexCount ||
+    if (tri[0] < 0 || tri[1] < 0 || tri[2] < 0 || static_cast<std::size_t>(tri[0]) >= vertexCount ||
         static_cast<std::size_t>(tri[1]) >= vertexCount ||
         static_cast<std::size_t>(tri[2]) >= vertexCount)
       continue;

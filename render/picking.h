@@ -13,8 +13,8 @@ namespace sb::render {
 
 struct TriangleHit {
   bool hit = false;
-  int triangle = -1;      // index into the triangle list
-  float distance = 0.0f;  // along the ray (the ray direction is unit length), metres
+  int triangle = -1;            // index into the triangle list
+  float distance = 0.0f;        // along the ray (the ray direction is unit length), metres
   glm::vec3 barycentric{0.0f};  // weights of the triangle's three corners, sum 1
   glm::vec3 point{0.0f};        // world position of the hit
 };

@@ -36,7 +36,8 @@ void writeFileAtomic(const std::string& path, const std::function<void(std::ostr
       path + ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
   try {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw FileError(path + ": cannot create the temporary file " + tmp + ": " + errnoText());
+    if (!out)
+      throw FileError(path + ": cannot create the temporary file " + tmp + ": " + errnoText());
     write(out);
     out.flush();
     if (!out) throw FileError(path + ": cannot write (disk full or I/O error)");

@@ -103,7 +103,8 @@ class Pool {
     for (;;) {
       if (!spinUntil([&] { return generation_.load(std::memory_order_acquire) != seen; })) {
         std::unique_lock<std::mutex> lock(m_);
-        wake_.wait(lock, [&] { return stop_ || generation_.load(std::memory_order_acquire) != seen; });
+        wake_.wait(lock,
+                   [&] { return stop_ || generation_.load(std::memory_order_acquire) != seen; });
         if (stop_) return;
       }
       seen = generation_.load(std::memory_order_acquire);

@@ -29,7 +29,8 @@ void parallelRanges(int count, int minParallel, int maxThreads, const Body& body
       chunks,
       [](void* ctx, int c) {
         const Job& j = *static_cast<const Job*>(ctx);
-        const long long begin = 1LL * j.count * c / j.chunks, end = 1LL * j.count * (c + 1) / j.chunks;
+        const long long begin = 1LL * j.count * c / j.chunks,
+                        end = 1LL * j.count * (c + 1) / j.chunks;
         if (begin < end) (*j.body)(int(begin), int(end));
       },
       &job);

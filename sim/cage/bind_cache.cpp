@@ -89,10 +89,21 @@ constexpr std::uint64_t kMaxFileBytes = std::uint64_t(16) << 30;
 
 // Stats are stored as a fixed list of doubles.
 std::vector<double> statsToList(const BindStats& s) {
-  return {s.seconds, static_cast<double>(s.threads), s.fromCache ? 1.0 : 0.0, s.minWeight, s.maxWeight,
-          static_cast<double>(s.negativeCount), s.maxSumError, s.maxLinearError, s.unprunedLinearError,
-          s.pruningError, s.maxPrunedL1, static_cast<double>(s.nonZeros), s.worstConditioning,
-          static_cast<double>(s.farPoints), static_cast<double>(s.onCagePoints)};
+  return {s.seconds,
+          static_cast<double>(s.threads),
+          s.fromCache ? 1.0 : 0.0,
+          s.minWeight,
+          s.maxWeight,
+          static_cast<double>(s.negativeCount),
+          s.maxSumError,
+          s.maxLinearError,
+          s.unprunedLinearError,
+          s.pruningError,
+          s.maxPrunedL1,
+          static_cast<double>(s.nonZeros),
+          s.worstConditioning,
+          static_cast<double>(s.farPoints),
+          static_cast<double>(s.onCagePoints)};
 }
 BindStats statsFromList(const std::vector<double>& v) {
   BindStats s;
@@ -121,7 +132,8 @@ constexpr std::size_t kStatsCount = 15;
 BindStats checkedStats(const std::vector<double>& v, std::int64_t rows, std::int64_t cols,
                        const std::string& path) {
   auto bad = [&](const char* what) {
-    throw std::runtime_error(path + ": implausible statistic " + what + " (file not written by this program)");
+    throw std::runtime_error(path + ": implausible statistic " + what +
+                             " (file not written by this program)");
   };
   for (double x : v)
     if (!std::isfinite(x)) bad("(not finite)");
@@ -195,9 +207,11 @@ void Embedding::save(const std::string& path, const std::array<std::uint64_t, 2>
       put(data, hasDouble_ ? sparseD_.valuePtr()[k] : static_cast<double>(sparseF_.valuePtr()[k]));
   } else {
     if (hasDouble_) {
-      data.append(reinterpret_cast<const char*>(denseD_.data()), sizeof(double) * static_cast<std::size_t>(denseD_.size()));
+      data.append(reinterpret_cast<const char*>(denseD_.data()),
+                  sizeof(double) * static_cast<std::size_t>(denseD_.size()));
     } else {
-      for (Eigen::Index k = 0; k < denseF_.size(); ++k) put(data, static_cast<double>(denseF_.data()[k]));
+      for (Eigen::Index k = 0; k < denseF_.size(); ++k)
+        put(data, static_cast<double>(denseF_.data()[k]));
     }
   }
   put(data, checksum(data));
@@ -221,9 +235,11 @@ Embedding Embedding::fromBytes(const std::string& data, const std::string& path,
   std::uint64_t stored;
   std::memcpy(&stored, data.data() + data.size() - 8, 8);
   const std::string body = data.substr(0, data.size() - 8);
-  if (checksum(body) != stored) throw std::runtime_error(path + ": checksum mismatch (corrupt file)");
+  if (checksum(body) != stored)
+    throw std::runtime_error(path + ": checksum mismatch (corrupt file)");
   Reader rd{body, 8, path};
-  if (rd.get<std::uint64_t>() != kFormatVersion) throw std::runtime_error(path + ": unsupported version");
+  if (rd.get<std::uint64_t>() != kFormatVersion)
+    throw std::runtime_error(path + ": unsupported version");
   std::array<std::uint64_t, 2> k;
   k[0] = rd.get<std::uint64_t>();
   k[1] = rd.get<std::uint64_t>();
@@ -241,15 +257,18 @@ Embedding Embedding::fromBytes(const std::string& data, const std::string& path,
   if (sparse) {
     const auto nnz = rd.get<std::int64_t>();
     if (nnz < 0 || nnz > rows * cols) throw std::runtime_error(path + ": bad nonzero count");
-    const std::size_t need = static_cast<std::size_t>(rows + 1) * 8 + static_cast<std::size_t>(nnz) * (4 + 8);
-    if (rd.pos + need != body.size()) throw std::runtime_error(path + ": size does not match the header");
+    const std::size_t need =
+        static_cast<std::size_t>(rows + 1) * 8 + static_cast<std::size_t>(nnz) * (4 + 8);
+    if (rd.pos + need != body.size())
+      throw std::runtime_error(path + ": size does not match the header");
     std::vector<std::int64_t> outer(static_cast<std::size_t>(rows) + 1);
     for (auto& o : outer) o = rd.get<std::int64_t>();
     std::vector<int> inner(static_cast<std::size_t>(nnz));
     for (auto& v : inner) v = rd.get<int>();
     std::vector<Eigen::Triplet<double>> trips;
     trips.reserve(static_cast<std::size_t>(nnz));
-    if (outer[0] != 0 || outer[static_cast<std::size_t>(rows)] != nnz) throw std::runtime_error(path + ": bad row offsets");
+    if (outer[0] != 0 || outer[static_cast<std::size_t>(rows)] != nnz)
+      throw std::runtime_error(path + ": bad row offsets");
     // All offsets checked before any is used: non-decreasing from 0 to nnz keeps every one in
     // [0, nnz] (checked row by row inside the loop below, a large offset early on read past
     // `inner` before the later, smaller one was seen).
@@ -272,7 +291,8 @@ Embedding Embedding::fromBytes(const std::string& data, const std::string& path,
     e = fromSparse(std::move(W));
   } else {
     const std::size_t need = static_cast<std::size_t>(rows * cols) * 8;
-    if (rd.pos + need != body.size()) throw std::runtime_error(path + ": size does not match the header");
+    if (rd.pos + need != body.size())
+      throw std::runtime_error(path + ": size does not match the header");
     DenseD W(rows, cols);
     std::memcpy(W.data(), body.data() + rd.pos, need);
     if (!W.allFinite()) throw std::runtime_error(path + ": non-finite weight");
@@ -298,7 +318,8 @@ std::array<std::uint64_t, 2> bindCacheKey(const std::vector<Vec3>& points, const
     h.value(static_cast<std::uint64_t>(cage.vertices.size()));
     if (!cage.vertices.empty()) h.bytes(cage.vertices.data(), cage.vertices.size() * sizeof(Vec3));
     h.value(static_cast<std::uint64_t>(cage.triangles.size()));
-    if (!cage.triangles.empty()) h.bytes(cage.triangles.data(), cage.triangles.size() * sizeof(std::array<int, 3>));
+    if (!cage.triangles.empty())
+      h.bytes(cage.triangles.data(), cage.triangles.size() * sizeof(std::array<int, 3>));
     h.value(static_cast<std::uint64_t>(options.storage));
     h.value(static_cast<std::int64_t>(options.denseMaxCageVertices));
     h.value(options.pruneThreshold);
@@ -311,8 +332,8 @@ std::array<std::uint64_t, 2> bindCacheKey(const std::vector<Vec3>& points, const
 
 std::string bindCachePath(const std::string& cacheDir, const std::array<std::uint64_t, 2>& key) {
   char name[64];
-  std::snprintf(name, sizeof(name), "mvc-%016llx%016llx.sbw", static_cast<unsigned long long>(key[0]),
-                static_cast<unsigned long long>(key[1]));
+  std::snprintf(name, sizeof(name), "mvc-%016llx%016llx.sbw",
+                static_cast<unsigned long long>(key[0]), static_cast<unsigned long long>(key[1]));
   std::string dir = cacheDir;
   if (!dir.empty() && dir.back() != '/') dir += '/';
   return dir + name;

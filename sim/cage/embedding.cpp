@@ -1,13 +1,13 @@
 #include "sim/cage/embedding.h"
 
+#include <sys/stat.h>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <limits>
 #include <iostream>
+#include <limits>
 #include <stdexcept>
-#include <sys/stat.h>
 
 #include <Eigen/Dense>
 #include <Eigen/Geometry>
@@ -28,8 +28,8 @@ using Vec3 = Eigen::Vector3d;
 
 // Prunes one row in place (see BindOptions::pruneThreshold). q_j = (v_j − x) / L.
 // Returns the L1 norm of the change.
-double pruneRow(std::vector<std::pair<int, double>>& row, const double* w, int m, const std::vector<Vec3>& q,
-                double threshold) {
+double pruneRow(std::vector<std::pair<int, double>>& row, const double* w, int m,
+                const std::vector<Vec3>& q, double threshold) {
   // Drop the smallest |w_j| while their total stays within threshold · Σ|w| (ties: by index).
   std::vector<std::pair<double, int>> order;
   order.reserve(static_cast<std::size_t>(m));
@@ -42,13 +42,17 @@ double pruneRow(std::vector<std::pair<int, double>>& row, const double* w, int m
   const double budget = threshold * total;
   double droppedMass = 0.0;
   std::size_t nDrop = 0;
-  while (nDrop < order.size() && droppedMass + order[nDrop].first <= budget) droppedMass += order[nDrop++].first;
+  while (nDrop < order.size() && droppedMass + order[nDrop].first <= budget)
+    droppedMass += order[nDrop++].first;
   row.clear();
-  std::vector<std::pair<double, int>> droppedList(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(nDrop));
-  for (std::size_t k = nDrop; k < order.size(); ++k) row.emplace_back(order[k].second, w[order[k].second]);
+  std::vector<std::pair<double, int>> droppedList(
+      order.begin(), order.begin() + static_cast<std::ptrdiff_t>(nDrop));
+  for (std::size_t k = nDrop; k < order.size(); ++k)
+    row.emplace_back(order[k].second, w[order[k].second]);
   std::sort(row.begin(), row.end());
   // Exact zeros carry nothing: drop them without counting.
-  row.erase(std::remove_if(row.begin(), row.end(), [](const auto& e) { return e.second == 0.0; }), row.end());
+  row.erase(std::remove_if(row.begin(), row.end(), [](const auto& e) { return e.second == 0.0; }),
+            row.end());
   if (droppedList.empty()) return 0.0;
   auto column = [&](int j) { return Eigen::Vector4d(1.0, q[j].x(), q[j].y(), q[j].z()); };
   // The kept vertices must span 3D (well conditioned) for the correction to exist: if they do
@@ -157,7 +161,8 @@ void Embedding::makeFloat() {
 }
 
 std::int64_t Embedding::nonZeros() const {
-  return sparse_ ? static_cast<std::int64_t>(sparseF_.nonZeros()) : static_cast<std::int64_t>(rows_) * cols_;
+  return sparse_ ? static_cast<std::int64_t>(sparseF_.nonZeros())
+                 : static_cast<std::int64_t>(rows_) * cols_;
 }
 
 void Embedding::deform(ConstPointsRef cagePositions, PointsRowMajor& out) const {
@@ -166,9 +171,11 @@ void Embedding::deform(ConstPointsRef cagePositions, PointsRowMajor& out) const 
                                 " cage positions, the embedding has " + std::to_string(cols_));
   out.resize(rows_, 3);
   // Memory-bound: stream W once, row by row, against the cage coordinates as three contiguous
-  // float arrays (a few KB, in L1). Rows are independent: one range per thread (sim/base/parallel_for.h).
+  // float arrays (a few KB, in L1). Rows are independent: one range per thread
+  // (sim/base/parallel_for.h).
   const int m = cols_;
-  std::vector<float> cx(static_cast<std::size_t>(m)), cy(static_cast<std::size_t>(m)), cz(static_cast<std::size_t>(m));
+  std::vector<float> cx(static_cast<std::size_t>(m)), cy(static_cast<std::size_t>(m)),
+      cz(static_cast<std::size_t>(m));
   for (int j = 0; j < m; ++j) {
     cx[j] = cagePositions(j, 0);
     cy[j] = cagePositions(j, 1);
@@ -228,17 +235,22 @@ void Embedding::deformDouble(const Eigen::Matrix<double, Eigen::Dynamic, 3>& cag
   if (cagePositions.rows() != cols_)
     throw std::invalid_argument("Embedding::deformDouble: wrong number of cage positions");
   if (hasDouble_) {
-    if (sparse_) out.noalias() = sparseD_ * cagePositions;
-    else out.noalias() = denseD_ * cagePositions;
+    if (sparse_)
+      out.noalias() = sparseD_ * cagePositions;
+    else
+      out.noalias() = denseD_ * cagePositions;
   } else {
-    if (sparse_) out.noalias() = sparseF_.cast<double>() * cagePositions;
-    else out.noalias() = denseF_.cast<double>() * cagePositions;
+    if (sparse_)
+      out.noalias() = sparseF_.cast<double>() * cagePositions;
+    else
+      out.noalias() = denseF_.cast<double>() * cagePositions;
   }
 }
 
 void Embedding::rowWeights(int i, std::vector<std::pair<int, double>>& out) const {
   out.clear();
-  if (i < 0 || i >= rows_) throw std::out_of_range("Embedding::rowWeights: row " + std::to_string(i));
+  if (i < 0 || i >= rows_)
+    throw std::out_of_range("Embedding::rowWeights: row " + std::to_string(i));
   if (sparse_) {
     if (hasDouble_) {
       for (SparseD::InnerIterator it(sparseD_, i); it; ++it) out.emplace_back(it.col(), it.value());
@@ -253,14 +265,18 @@ void Embedding::rowWeights(int i, std::vector<std::pair<int, double>>& out) cons
   }
 }
 
-Embedding bindMeanValue(const std::vector<Vec3>& points, const TriangleMesh& cage, const BindOptions& options) {
+Embedding bindMeanValue(const std::vector<Vec3>& points, const TriangleMesh& cage,
+                        const BindOptions& options) {
   mesh::validateClosedSurface(cage, "cage");
   for (std::size_t i = 0; i < points.size(); ++i) {
-    if (!points[i].allFinite()) throw std::invalid_argument("bind: point " + std::to_string(i) + " is not finite");
+    if (!points[i].allFinite())
+      throw std::invalid_argument("bind: point " + std::to_string(i) + " is not finite");
   }
   auto warn = [&](const std::string& msg) {
-    if (options.warning) options.warning(msg);
-    else std::cerr << "warning: " << msg << "\n";
+    if (options.warning)
+      options.warning(msg);
+    else
+      std::cerr << "warning: " << msg << "\n";
   };
 
   std::array<std::uint64_t, 2> key{};
@@ -296,13 +312,15 @@ Embedding bindMeanValue(const std::vector<Vec3>& points, const TriangleMesh& cag
 
   bool sparse = options.storage == WeightStorage::Sparse ||
                 (options.storage == WeightStorage::Auto && m > options.denseMaxCageVertices);
-  const int threads = options.threads > 0 ? std::min(options.threads, threadCount()) : threadCount();
+  const int threads =
+      options.threads > 0 ? std::min(options.threads, threadCount()) : threadCount();
   // Memory first (BindOptions::maxWeightBytes): dense keeps a double and a float copy.
   const double denseBytes = 12.0 * double(n) * double(m);
   const bool denseTooBig = denseBytes > double(options.maxWeightBytes);
   if (denseTooBig && options.storage == WeightStorage::Dense)
-    throw std::runtime_error("bind: dense weights for " + std::to_string(n) + " points × " + std::to_string(m) +
-                             " cage vertices need " + formatBytes(std::uint64_t(denseBytes)) + ", more than the " +
+    throw std::runtime_error("bind: dense weights for " + std::to_string(n) + " points × " +
+                             std::to_string(m) + " cage vertices need " +
+                             formatBytes(std::uint64_t(denseBytes)) + ", more than the " +
                              formatBytes(options.maxWeightBytes) + " allowed; use sparse storage");
   if (denseTooBig) sparse = true;
   // Pruned weights kept per row, estimated on up to 64 evenly spaced points (a sparse bind's
@@ -324,10 +342,11 @@ Embedding bindMeanValue(const std::vector<Vec3>& points, const TriangleMesh& cag
     }
     const double sparseBytes = 52.0 * double(kept) / double(samples) * double(n);
     if (sparseBytes > double(options.maxWeightBytes))
-      throw std::runtime_error("bind: the weights for " + std::to_string(n) + " points × " + std::to_string(m) +
-                               " cage vertices need about " + formatBytes(std::uint64_t(sparseBytes)) +
-                               " even sparse, more than the " + formatBytes(options.maxWeightBytes) +
-                               " allowed (BindOptions::maxWeightBytes)");
+      throw std::runtime_error(
+          "bind: the weights for " + std::to_string(n) + " points × " + std::to_string(m) +
+          " cage vertices need about " + formatBytes(std::uint64_t(sparseBytes)) +
+          " even sparse, more than the " + formatBytes(options.maxWeightBytes) +
+          " allowed (BindOptions::maxWeightBytes)");
   }
   if (sparse && options.storage == WeightStorage::Auto && n > 0 && !denseTooBig) {
     // Auto: sparse only when pruning keeps at most half of the entries; otherwise store dense
@@ -337,11 +356,14 @@ Embedding bindMeanValue(const std::vector<Vec3>& points, const TriangleMesh& cag
 
   Embedding::DenseD dense;
   std::vector<std::vector<std::pair<int, double>>> rows;
-  if (sparse) rows.resize(static_cast<std::size_t>(n));
-  else dense.resize(n, m);
+  if (sparse)
+    rows.resize(static_cast<std::size_t>(n));
+  else
+    dense.resize(n, m);
 
   // Per-point figures, reduced serially afterwards (deterministic).
-  std::vector<double> linErr(n, 0.0), linErr0(n, 0.0), pruneErr(n, 0.0), prunedL1(n, 0.0), cond(n, 1.0);
+  std::vector<double> linErr(n, 0.0), linErr0(n, 0.0), pruneErr(n, 0.0), prunedL1(n, 0.0),
+      cond(n, 1.0);
   std::vector<char> onCage(n, 0), failed(n, 0);
 
   const int block = 256;
@@ -375,7 +397,8 @@ Embedding bindMeanValue(const std::vector<Vec3>& points, const TriangleMesh& cag
         }
       }
     });
-    if (options.progress) options.progress(static_cast<std::size_t>(end), static_cast<std::size_t>(n));
+    if (options.progress)
+      options.progress(static_cast<std::size_t>(end), static_cast<std::size_t>(n));
   }
   for (int i = 0; i < n; ++i) {
     if (failed[i]) {

@@ -19,27 +19,28 @@ namespace sb::cage {
 
 // Figures about a bind, filled by bindMeanValue (and kept in the cache file).
 struct BindStats {
-  double seconds = 0.0;              // wall time of the weight computation (0 when cached)
-  int threads = 1;                   // threads used
+  double seconds = 0.0;  // wall time of the weight computation (0 when cached)
+  int threads = 1;       // threads used
   bool fromCache = false;
   double minWeight = 0.0, maxWeight = 0.0;  // over the stored weights
-  std::int64_t negativeCount = 0;    // stored weights < 0 (kept, never clamped)
-  double maxSumError = 0.0;          // max_i |Σ_j W_ij − 1| (stored weights)
-  double maxLinearError = 0.0;       // max_i |Σ_j W_ij v_j − x_i| / cage diagonal (stored weights)
+  std::int64_t negativeCount = 0;           // stored weights < 0 (kept, never clamped)
+  double maxSumError = 0.0;                 // max_i |Σ_j W_ij − 1| (stored weights)
+  double maxLinearError = 0.0;  // max_i |Σ_j W_ij v_j − x_i| / cage diagonal (stored weights)
   double unprunedLinearError = 0.0;  // the same before pruning
-  double pruningError = 0.0;         // max_i |Σ_j (W_pruned − W)_ij v_j| / cage diagonal (rest pose)
-  double maxPrunedL1 = 0.0;          // max_i Σ_j |W_pruned − W|_ij: bound on the pruning error of a
-                                     // deformed pose relative to its largest non-affine cage motion
+  double pruningError = 0.0;  // max_i |Σ_j (W_pruned − W)_ij v_j| / cage diagonal (rest pose)
+  double maxPrunedL1 = 0.0;   // max_i Σ_j |W_pruned − W|_ij: bound on the pruning error of a
+                              // deformed pose relative to its largest non-affine cage motion
   std::int64_t nonZeros = 0;
-  double worstConditioning = 1.0;    // max cancellation factor (see MvcInfo); error ≈ 1e-16 × this
-  std::int64_t farPoints = 0;        // points farther than 4× the cage diagonal from the cage centre
-  std::int64_t onCagePoints = 0;     // points evaluated as on a cage vertex/edge/face
+  double worstConditioning = 1.0;  // max cancellation factor (see MvcInfo); error ≈ 1e-16 × this
+  std::int64_t farPoints = 0;      // points farther than 4× the cage diagonal from the cage centre
+  std::int64_t onCagePoints = 0;   // points evaluated as on a cage vertex/edge/face
 };
 
 enum class WeightStorage { Auto, Dense, Sparse };
 
 struct BindOptions {
-  int threads = 0;  // threads for the bind, at most threadCount() (0 = threadCount(); sim/base/parallel.h)
+  int threads =
+      0;  // threads for the bind, at most threadCount() (0 = threadCount(); sim/base/parallel.h)
   // Auto: dense when the cage has at most denseMaxCageVertices vertices; otherwise pruned and
   // sparse, unless pruning keeps more than half the entries on a sample of 64 points (then
   // dense, unpruned).
@@ -50,13 +51,14 @@ struct BindOptions {
   // (weighted by |w_j|) that restores both Σw = 1 and linear precision Σ w_j v_j = x exactly
   // (see README.md).
   double pruneThreshold = 0.01;
-  bool keepDoublePrecision = true;  // keep the double weights (rowWeights, deformDouble); float always
+  bool keepDoublePrecision =
+      true;  // keep the double weights (rowWeights, deformDouble); float always
   // Memory the weights may take at most (bytes, estimated before binding: dense 12 bytes per
   // point × cage vertex, sparse about 52 bytes per kept weight at the peak). Auto storage
   // switches to sparse when dense would exceed it; a bind that still exceeds it is refused with
   // the figure (std::runtime_error) instead of exhausting memory.
   std::uint64_t maxWeightBytes = std::uint64_t(4) << 30;
-  std::string cacheDir;             // empty = no cache
+  std::string cacheDir;  // empty = no cache
   // Called from the calling thread after each block of points: (points done, total).
   std::function<void(std::size_t, std::size_t)> progress;
   // Cache problems (corrupt file, cannot write). Default: print to stderr.
@@ -122,12 +124,14 @@ std::uint64_t weightFileChecksum(const std::string& bytesBeforeChecksum);
 
 // The cache key: a 128-bit hash of the points, the cage vertices and triangles and the options
 // that change the result (storage rule, threshold, precision), plus the file format version.
-std::array<std::uint64_t, 2> bindCacheKey(const std::vector<Eigen::Vector3d>& points, const mesh::TriangleMesh& cage,
+std::array<std::uint64_t, 2> bindCacheKey(const std::vector<Eigen::Vector3d>& points,
+                                          const mesh::TriangleMesh& cage,
                                           const BindOptions& options);
 std::string bindCachePath(const std::string& cacheDir, const std::array<std::uint64_t, 2>& key);
 
-// Validates the cage (throws mesh::SurfaceError), then computes mean value coordinates of every point.
-// With options.cacheDir set, reuses a cached bind with the same key, else binds and writes it.
+// Validates the cage (throws mesh::SurfaceError), then computes mean value coordinates of every
+// point. With options.cacheDir set, reuses a cached bind with the same key, else binds and writes
+// it.
 Embedding bindMeanValue(const std::vector<Eigen::Vector3d>& points, const mesh::TriangleMesh& cage,
                         const BindOptions& options = {});
 

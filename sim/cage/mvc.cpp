@@ -38,8 +38,16 @@ inline double angleOf(double s, double c) {
   const double hi = s < ac ? ac : s;
   const double t = lo / (hi > 0.0 ? hi : 1.0);  // hi = 0 implies lo = 0
   const AtanTable& T = kAtan;
-  const double a = t > T.split[3] ? T.anchor[4] : t > T.split[2] ? T.anchor[3] : t > T.split[1] ? T.anchor[2] : t > T.split[0] ? T.anchor[1] : 0.0;
-  const double b = t > T.split[3] ? T.base[4] : t > T.split[2] ? T.base[3] : t > T.split[1] ? T.base[2] : t > T.split[0] ? T.base[1] : 0.0;
+  const double a = t > T.split[3]   ? T.anchor[4]
+                   : t > T.split[2] ? T.anchor[3]
+                   : t > T.split[1] ? T.anchor[2]
+                   : t > T.split[0] ? T.anchor[1]
+                                    : 0.0;
+  const double b = t > T.split[3]   ? T.base[4]
+                   : t > T.split[2] ? T.base[3]
+                   : t > T.split[1] ? T.base[2]
+                   : t > T.split[0] ? T.base[1]
+                                    : 0.0;
   const double z = (t - a) / (1.0 + t * a);
   const double z2 = z * z;
   double p = -1.0 / 15.0;
@@ -173,8 +181,9 @@ void MeanValueCage::triangleAlone(const Vec3& p, const Tri& t, double out[3]) co
 namespace {
 
 // Unit directions u_j = (v_j − x)/d_j and distances.
-SB_CAGE_CLONES void vertexPass(int nv, const double* vx, const double* vy, const double* vz, double x, double y,
-                               double z, double* ux, double* uy, double* uz, double* invd, double* dd) {
+SB_CAGE_CLONES void vertexPass(int nv, const double* vx, const double* vy, const double* vz,
+                               double x, double y, double z, double* ux, double* uy, double* uz,
+                               double* invd, double* dd) {
 #pragma omp simd
   for (int j = 0; j < nv; ++j) {
     const double rx = vx[j] - x, ry = vy[j] - y, rz = vz[j] - z;
@@ -190,8 +199,9 @@ SB_CAGE_CLONES void vertexPass(int nv, const double* vx, const double* vy, const
 
 // Per edge: arc angle θ (accurate at 0 and π) and the unit normal of the plane through x and
 // the edge (zero if undefined: then θ·n = 0, or x is on the edge and is caught later).
-SB_CAGE_CLONES void edgePass(int ne, const int* ea, const int* eb, const double* ux, const double* uy,
-                             const double* uz, double* th, double* ss, double* nx, double* ny, double* nz) {
+SB_CAGE_CLONES void edgePass(int ne, const int* ea, const int* eb, const double* ux,
+                             const double* uy, const double* uz, double* th, double* ss, double* nx,
+                             double* ny, double* nz) {
 #pragma omp simd
   for (int e = 0; e < ne; ++e) {
     const int a = ea[e], b = eb[e];
@@ -220,8 +230,8 @@ struct PointArrays {
 // Per triangle: w_k = (m · c_k) / (det · d_k) with m = ½ Σ θ_k n_k, c_k = u_{k+1} × u_{k+2}
 // = sign·s_e·n_e and det = h · 2A / (d0 d1 d2) (h from the face normal: accurate near the face).
 // Flags the triangles whose plane passes within kPlaneBand·(distance to its vertices) of x.
-SB_CAGE_CLONES void trianglePass(int nt, TriArrays T, PointArrays P, double x, double y, double z, double band,
-                                 double* w0, double* w1, double* w2, int* flag) {
+SB_CAGE_CLONES void trianglePass(int nt, TriArrays T, PointArrays P, double x, double y, double z,
+                                 double band, double* w0, double* w1, double* w2, int* flag) {
 #pragma omp simd
   for (int t = 0; t < nt; ++t) {
     const int i0 = T.v0[t], i1 = T.v1[t], i2 = T.v2[t];
@@ -231,7 +241,8 @@ SB_CAGE_CLONES void trianglePass(int nt, TriArrays T, PointArrays P, double x, d
     flag[t] = std::abs(h) < band * dmin ? 1 : 0;
     const double det = h * T.area[t] * P.invd[i0] * P.invd[i1] * P.invd[i2];
     const int e0 = T.e0[t], e1 = T.e1[t], e2 = T.e2[t];
-    const double f0 = 0.5 * P.th[e0] * T.s0[t], f1 = 0.5 * P.th[e1] * T.s1[t], f2 = 0.5 * P.th[e2] * T.s2[t];
+    const double f0 = 0.5 * P.th[e0] * T.s0[t], f1 = 0.5 * P.th[e1] * T.s1[t],
+                 f2 = 0.5 * P.th[e2] * T.s2[t];
     const double mx = f0 * P.enx[e0] + f1 * P.enx[e1] + f2 * P.enx[e2];
     const double my = f0 * P.eny[e0] + f1 * P.eny[e1] + f2 * P.eny[e2];
     const double mz = f0 * P.enz[e0] + f1 * P.enz[e1] + f2 * P.enz[e2];
@@ -275,8 +286,8 @@ bool MeanValueCage::weights(const Vec3& x, double* w, Scratch& sc, MvcInfo* info
   sc.nearPlane.resize(nt);
 
   // 1. Unit directions to the vertices; on a vertex the weights are that vertex's.
-  vertexPass(nv, vx_.data(), vy_.data(), vz_.data(), x.x(), x.y(), x.z(), sc.ux.data(), sc.uy.data(), sc.uz.data(),
-             sc.invd.data(), sc.d.data());
+  vertexPass(nv, vx_.data(), vy_.data(), vz_.data(), x.x(), x.y(), x.z(), sc.ux.data(),
+             sc.uy.data(), sc.uz.data(), sc.invd.data(), sc.d.data());
   for (int j = 0; j < nv; ++j) {
     if (sc.d[j] <= onTol) {
       std::fill(w, w + nv, 0.0);
@@ -290,14 +301,15 @@ bool MeanValueCage::weights(const Vec3& x, double* w, Scratch& sc, MvcInfo* info
   }
 
   // 2. Edges.
-  edgePass(ne, ea_.data(), eb_.data(), sc.ux.data(), sc.uy.data(), sc.uz.data(), sc.theta.data(), sc.s.data(),
-           sc.nx.data(), sc.ny.data(), sc.nz.data());
+  edgePass(ne, ea_.data(), eb_.data(), sc.ux.data(), sc.uy.data(), sc.uz.data(), sc.theta.data(),
+           sc.s.data(), sc.nx.data(), sc.ny.data(), sc.nz.data());
 
   // 3. Triangles.
-  const TriArrays T{tv0_.data(), tv1_.data(), tv2_.data(), te0_.data(), te1_.data(), te2_.data(), ts0_.data(),
-                    ts1_.data(), ts2_.data(), tnx_.data(), tny_.data(), tnz_.data(), tarea_.data()};
-  const PointArrays P{vx_.data(), vy_.data(), vz_.data(), sc.d.data(), sc.invd.data(), sc.theta.data(),
-                      sc.s.data(), sc.nx.data(), sc.ny.data(), sc.nz.data()};
+  const TriArrays T{tv0_.data(), tv1_.data(), tv2_.data(),  te0_.data(), te1_.data(),
+                    te2_.data(), ts0_.data(), ts1_.data(),  ts2_.data(), tnx_.data(),
+                    tny_.data(), tnz_.data(), tarea_.data()};
+  const PointArrays P{vx_.data(),      vy_.data(),  vz_.data(),   sc.d.data(),  sc.invd.data(),
+                      sc.theta.data(), sc.s.data(), sc.nx.data(), sc.ny.data(), sc.nz.data()};
   trianglePass(nt, T, P, x.x(), x.y(), x.z(), kPlaneBand, sc.w0.data(), sc.w1.data(), sc.w2.data(),
                sc.nearPlane.data());
 
@@ -331,7 +343,8 @@ bool MeanValueCage::weights(const Vec3& x, double* w, Scratch& sc, MvcInfo* info
         // Evaluate g at heights ±δ, δ = kPlaneBand·ρ, where the closed form is accurate,
         // and interpolate g to the height h (error O(δ³/ρ³) relative).
         // δ is kept above the rounding level of the coordinates (x within ~1e-9 of the cage).
-        const double delta = std::max(kPlaneBand * rho, 1e-12 * (diagonal_ + x.cwiseAbs().maxCoeff()));
+        const double delta =
+            std::max(kPlaneBand * rho, 1e-12 * (diagonal_ + x.cwiseAbs().maxCoeff()));
         const Vec3 pp = x + (h - delta) * t.normal;  // height (v0 - p)·n = +δ
         const Vec3 pm = x + (h + delta) * t.normal;  // height -δ
         const double hp = t.normal.dot(p0 - pp), hm = t.normal.dot(p0 - pm);

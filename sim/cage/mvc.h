@@ -13,9 +13,9 @@ namespace sb::cage {
 
 // How a point was evaluated.
 enum class MvcCase {
-  General,     // the closed form (possibly with the in-plane treatment for some faces)
-  OnVertex,    // within 1e-13·cage diagonal of a cage vertex: weight 1 there
-  OnSurface,   // within 1e-13·cage diagonal of a face or edge: barycentric coordinates
+  General,    // the closed form (possibly with the in-plane treatment for some faces)
+  OnVertex,   // within 1e-13·cage diagonal of a cage vertex: weight 1 there
+  OnSurface,  // within 1e-13·cage diagonal of a face or edge: barycentric coordinates
 };
 
 struct MvcInfo {
@@ -53,7 +53,8 @@ class MeanValueCage {
   // Writes the vertexCount() normalised weights of x into w (Σw = 1, Σ w_j v_j = x).
   // Returns false (w filled with NaN) only if the weights cannot be normalised (Σ = 0 or not
   // finite), which does not happen for points within 4× the cage size of a valid cage.
-  bool weights(const Eigen::Vector3d& x, double* w, Scratch& scratch, MvcInfo* info = nullptr) const;
+  bool weights(const Eigen::Vector3d& x, double* w, Scratch& scratch,
+               MvcInfo* info = nullptr) const;
 
  private:
   struct Tri {
@@ -79,10 +80,12 @@ class MeanValueCage {
 
 // Stateless convenience: prepares the cage and evaluates one point (slow for many points).
 // w must hold cage.vertices.size() values.
-bool mvcWeights(const Eigen::Vector3d& x, const mesh::TriangleMesh& cage, double* w, MvcInfo* info = nullptr);
+bool mvcWeights(const Eigen::Vector3d& x, const mesh::TriangleMesh& cage, double* w,
+                MvcInfo* info = nullptr);
 
 // Tolerances, all relative (see README.md).
 inline constexpr double kOnCageTolerance = 1e-13;  // × cage diagonal: snap to vertex / face
-inline constexpr double kPlaneBand = 1e-4;         // |height| < 1e-4 × distance to a face: in-plane treatment
+inline constexpr double kPlaneBand =
+    1e-4;  // |height| < 1e-4 × distance to a face: in-plane treatment
 
 }  // namespace sb::cage

@@ -288,8 +288,7 @@ SurfaceTopology validateClosedSurface(const TriangleMesh& surface, const std::st
   }
   if (!(volume > 1e-12 * diag * diag * diag)) {
     std::ostringstream s;
-    s << (volume < 0 ? "inverted: triangles face inward (signed volume "
-                     : "flat: signed volume ")
+    s << (volume < 0 ? "inverted: triangles face inward (signed volume " : "flat: signed volume ")
       << volume << " for a bounding-box diagonal of " << diag << ")";
     fail(name, s.str());
   }

@@ -19,7 +19,8 @@ std::string lowerExtension(const std::string& path) {
   const auto slash = path.find_last_of('/');
   if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
   std::string ext = path.substr(dot + 1);
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return ext;
 }
 
@@ -31,7 +32,8 @@ MeshFormat meshFormatOf(const std::string& path) {
   if (ext == "off") return MeshFormat::Off;
   if (ext == "ply") return MeshFormat::Ply;
   if (ext == "stl") return MeshFormat::Stl;
-  throw MeshError(path + ": unsupported mesh format '" + ext + "' (expected .obj, .off, .ply or .stl)");
+  throw MeshError(path + ": unsupported mesh format '" + ext +
+                  "' (expected .obj, .off, .ply or .stl)");
 }
 
 TriangleMesh parseMesh(const std::string& bytes, MeshFormat format, const std::string& name) {
@@ -39,10 +41,18 @@ TriangleMesh parseMesh(const std::string& bytes, MeshFormat format, const std::s
   TriangleMesh mesh;
   try {
     switch (format) {
-      case MeshFormat::Obj: mesh = reading::parseObj(bytes); break;
-      case MeshFormat::Off: mesh = reading::parseOff(bytes); break;
-      case MeshFormat::Ply: mesh = reading::parsePly(bytes); break;
-      case MeshFormat::Stl: mesh = reading::parseStl(bytes); break;
+      case MeshFormat::Obj:
+        mesh = reading::parseObj(bytes);
+        break;
+      case MeshFormat::Off:
+        mesh = reading::parseOff(bytes);
+        break;
+      case MeshFormat::Ply:
+        mesh = reading::parsePly(bytes);
+        break;
+      case MeshFormat::Stl:
+        mesh = reading::parseStl(bytes);
+        break;
     }
   } catch (const ParseFail& f) {
     throw MeshError(name + ": " + f.reason);
@@ -73,7 +83,8 @@ void writeObj(const std::string& path, const TriangleMesh& mesh) {
         std::snprintf(line, sizeof line, "v %.17g %.17g %.17g\n", v.x(), v.y(), v.z());
         out << line;
       }
-      for (const auto& t : mesh.triangles) out << "f " << t[0] + 1 << " " << t[1] + 1 << " " << t[2] + 1 << "\n";
+      for (const auto& t : mesh.triangles)
+        out << "f " << t[0] + 1 << " " << t[1] + 1 << " " << t[2] + 1 << "\n";
     });
   } catch (const FileError& e) {
     throw MeshError(e.what());

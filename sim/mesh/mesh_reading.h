@@ -26,8 +26,12 @@ using std::string_view;
 struct ParseFail {
   std::string reason;
 };
-[[noreturn]] inline void fail(const std::string& reason) { throw ParseFail{reason}; }
-inline std::string lineText(int line) { return "line " + std::to_string(line) + ": "; }
+[[noreturn]] inline void fail(const std::string& reason) {
+  throw ParseFail{reason};
+}
+inline std::string lineText(int line) {
+  return "line " + std::to_string(line) + ": ";
+}
 
 inline std::string numberText(double v) {
   char buf[32];
@@ -42,7 +46,9 @@ inline void checkCoordinate(double c, const std::string& where) {
     fail(where + "coordinate " + numberText(c) + " is beyond float range (|c| ≤ 3.4e38)");
 }
 
-inline bool isSpace(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
+inline bool isSpace(char c) {
+  return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v';
+}
 
 // Splits text into lines ('\n'; a trailing '\r' is dropped with the other blanks).
 class Lines {
@@ -125,7 +131,8 @@ inline int parseCount(string_view token, const std::string& what) {
 }
 
 inline void addFace(TriangleMesh& mesh, const std::vector<int>& face) {
-  for (size_t k = 1; k + 1 < face.size(); ++k) mesh.triangles.push_back({face[0], face[k], face[k + 1]});
+  for (size_t k = 1; k + 1 < face.size(); ++k)
+    mesh.triangles.push_back({face[0], face[k], face[k + 1]});
 }
 
 // Big-endian / little-endian readers over the remaining bytes.

@@ -41,7 +41,8 @@ TriangleMesh parseObj(string_view text) {
                std::to_string(count) + " vertices so far)");
         face.push_back(int(resolved - 1));
       }
-      if (face.size() < 3) fail(where + "a face needs at least 3 vertices, got " + std::to_string(face.size()));
+      if (face.size() < 3)
+        fail(where + "a face needs at least 3 vertices, got " + std::to_string(face.size()));
       addFace(mesh, face);
     }
   }

@@ -45,7 +45,8 @@ TriangleMesh parseOffBinary(string_view text, size_t start) {
     for (int c = 0; c < k; ++c) {
       const std::int32_t i = in.get<std::int32_t>("the faces");
       if (i < 0 || i >= nv)
-        fail(where + "vertex index " + std::to_string(i) + " out of range (" + std::to_string(nv) + " vertices)");
+        fail(where + "vertex index " + std::to_string(i) + " out of range (" + std::to_string(nv) +
+             " vertices)");
       face.push_back(i);
     }
     const std::int32_t colours = in.get<std::int32_t>("the faces");
@@ -77,9 +78,11 @@ TriangleMesh parseOff(string_view text) {
   Tokens t{string_view()};
   if (!nextLine(t) || !t.next(tok)) fail("empty OFF file");
   bool binaryCapable = false;
-  if (!offKeyword(tok, binaryCapable)) fail("not an OFF file (first word " + quoted(tok) + ", expected OFF)");
+  if (!offKeyword(tok, binaryCapable))
+    fail("not an OFF file (first word " + quoted(tok) + ", expected OFF)");
   if (t.next(tok)) {
-    if (tok == "BINARY" && binaryCapable && t.empty()) return parseOffBinary(text, lines.position());
+    if (tok == "BINARY" && binaryCapable && t.empty())
+      return parseOffBinary(text, lines.position());
     if (tok == "BINARY") fail("only plain binary OFF ('OFF BINARY') is supported");
   } else if (!nextLine(t) || !t.next(tok)) {
     fail("the file ends before the vertex and face counts");
@@ -93,7 +96,8 @@ TriangleMesh parseOff(string_view text) {
   TriangleMesh mesh;
   for (int i = 0; i < nv; ++i) {
     if (!nextLine(t))
-      fail("the header declares " + std::to_string(nv) + " vertices, the file ends after " + std::to_string(i));
+      fail("the header declares " + std::to_string(nv) + " vertices, the file ends after " +
+           std::to_string(i));
     const std::string where = lineText(lines.number());
     double c[3];
     for (double& v : c) {
@@ -110,19 +114,24 @@ TriangleMesh parseOff(string_view text) {
   std::vector<int> face;
   for (int f = 0; f < nf; ++f) {
     if (!nextLine(t))
-      fail("the header declares " + std::to_string(nf) + " faces, the file ends after " + std::to_string(f));
+      fail("the header declares " + std::to_string(nf) + " faces, the file ends after " +
+           std::to_string(f));
     const std::string where = lineText(lines.number());
     t.next(tok);
     long long k = 0;
-    if (!parseInteger(tok, k)) fail(where + "a face starts with its corner count, got " + quoted(tok));
+    if (!parseInteger(tok, k))
+      fail(where + "a face starts with its corner count, got " + quoted(tok));
     if (k < 3) fail(where + "a face needs at least 3 vertices, got " + std::to_string(k));
     face.clear();
     for (long long c = 0; c < k; ++c) {
       long long i = 0;
-      if (!t.next(tok)) fail(where + "the face declares " + std::to_string(k) + " corners but lists " + std::to_string(c));
+      if (!t.next(tok))
+        fail(where + "the face declares " + std::to_string(k) + " corners but lists " +
+             std::to_string(c));
       if (!parseInteger(tok, i)) fail(where + "bad vertex index " + quoted(tok));
       if (i < 0 || i >= nv)
-        fail(where + "vertex index " + std::to_string(i) + " out of range (" + std::to_string(nv) + " vertices)");
+        fail(where + "vertex index " + std::to_string(i) + " out of range (" + std::to_string(nv) +
+             " vertices)");
       face.push_back(int(i));
     }
     while (t.next(tok)) {  // a colour

@@ -13,11 +13,11 @@ enum class PlyType { Int8, UInt8, Int16, UInt16, Int32, UInt32, Float32, Float64
 
 bool plyType(string_view name, PlyType& type) {
   static const std::pair<const char*, PlyType> names[] = {
-      {"char", PlyType::Int8},     {"int8", PlyType::Int8},      {"uchar", PlyType::UInt8},
-      {"uint8", PlyType::UInt8},   {"short", PlyType::Int16},    {"int16", PlyType::Int16},
-      {"ushort", PlyType::UInt16}, {"uint16", PlyType::UInt16},  {"int", PlyType::Int32},
-      {"int32", PlyType::Int32},   {"uint", PlyType::UInt32},    {"uint32", PlyType::UInt32},
-      {"float", PlyType::Float32}, {"float32", PlyType::Float32}, {"double", PlyType::Float64},
+      {"char", PlyType::Int8},      {"int8", PlyType::Int8},       {"uchar", PlyType::UInt8},
+      {"uint8", PlyType::UInt8},    {"short", PlyType::Int16},     {"int16", PlyType::Int16},
+      {"ushort", PlyType::UInt16},  {"uint16", PlyType::UInt16},   {"int", PlyType::Int32},
+      {"int32", PlyType::Int32},    {"uint", PlyType::UInt32},     {"uint32", PlyType::UInt32},
+      {"float", PlyType::Float32},  {"float32", PlyType::Float32}, {"double", PlyType::Float64},
       {"float64", PlyType::Float64}};
   for (const auto& [n, t] : names)
     if (name == n) {
@@ -45,7 +45,9 @@ size_t plySize(PlyType t) {
   return 8;
 }
 
-bool plyInteger(PlyType t) { return t != PlyType::Float32 && t != PlyType::Float64; }
+bool plyInteger(PlyType t) {
+  return t != PlyType::Float32 && t != PlyType::Float64;
+}
 
 struct PlyProperty {
   std::string name;
@@ -75,18 +77,28 @@ class PlyValues {
       } else if (!parseDouble(tok, v)) {
         fail(where + "not a number: " + quoted(tok));
       }
-      return t == PlyType::Float32 && std::isfinite(v) && std::abs(v) <= double(FLT_MAX) ? double(float(v)) : v;
+      return t == PlyType::Float32 && std::isfinite(v) && std::abs(v) <= double(FLT_MAX)
+                 ? double(float(v))
+                 : v;
     }
     const char* what = "the element data";
     switch (t) {
-      case PlyType::Int8: return bytes_.get<std::int8_t>(what);
-      case PlyType::UInt8: return bytes_.get<std::uint8_t>(what);
-      case PlyType::Int16: return bytes_.get<std::int16_t>(what);
-      case PlyType::UInt16: return bytes_.get<std::uint16_t>(what);
-      case PlyType::Int32: return bytes_.get<std::int32_t>(what);
-      case PlyType::UInt32: return bytes_.get<std::uint32_t>(what);
-      case PlyType::Float32: return bytes_.get<float>(what);
-      case PlyType::Float64: return bytes_.get<double>(what);
+      case PlyType::Int8:
+        return bytes_.get<std::int8_t>(what);
+      case PlyType::UInt8:
+        return bytes_.get<std::uint8_t>(what);
+      case PlyType::Int16:
+        return bytes_.get<std::int16_t>(what);
+      case PlyType::UInt16:
+        return bytes_.get<std::uint16_t>(what);
+      case PlyType::Int32:
+        return bytes_.get<std::int32_t>(what);
+      case PlyType::UInt32:
+        return bytes_.get<std::uint32_t>(what);
+      case PlyType::Float32:
+        return bytes_.get<float>(what);
+      case PlyType::Float64:
+        return bytes_.get<double>(what);
     }
     return 0;
   }
@@ -125,10 +137,14 @@ TriangleMesh parsePly(string_view text) {
     if (tok == "format") {
       if (format >= 0) fail(where + "a second format line");
       if (!t.next(tok)) fail(where + "format needs a type");
-      if (tok == "ascii") format = 0;
-      else if (tok == "binary_little_endian") format = 1;
-      else if (tok == "binary_big_endian") format = 2;
-      else fail(where + "unknown format " + quoted(tok));
+      if (tok == "ascii")
+        format = 0;
+      else if (tok == "binary_little_endian")
+        format = 1;
+      else if (tok == "binary_big_endian")
+        format = 2;
+      else
+        fail(where + "unknown format " + quoted(tok));
       if (!t.next(tok) || tok != "1.0") fail(where + "only PLY version 1.0 is supported");
     } else if (tok == "element") {
       PlyElement e;
@@ -169,23 +185,26 @@ TriangleMesh parsePly(string_view text) {
     // Every element takes at least one byte (binary) or two (ASCII: a digit and a blank), so
     // a count the remaining bytes cannot hold fails here, before any work.
     size_t minBytes = 0;
-    for (const PlyProperty& p : e.properties) minBytes += in.ascii() ? 2 : plySize(p.list ? p.countType : p.type);
+    for (const PlyProperty& p : e.properties)
+      minBytes += in.ascii() ? 2 : plySize(p.list ? p.countType : p.type);
     if (in.ascii()) minBytes -= 1;  // the last value's blank may be the end of the file
     const size_t available = in.ascii() ? text.size() - lines.position() : in.bytesLeft();
     if (std::uint64_t(e.count) * minBytes > available)
-      fail("the header declares " + std::to_string(e.count) + " " + e.name + " elements, more than the " +
-           std::to_string(available) + " bytes after it can hold");
+      fail("the header declares " + std::to_string(e.count) + " " + e.name +
+           " elements, more than the " + std::to_string(available) + " bytes after it can hold");
     const bool isVertex = e.name == "vertex", isFace = e.name == "face";
     int axis[3] = {-1, -1, -1}, indices = -1;
     for (size_t k = 0; k < e.properties.size(); ++k) {
       const PlyProperty& p = e.properties[k];
       for (int a = 0; a < 3; ++a)
         if (isVertex && !p.list && p.name == std::string(1, char('x' + a))) axis[a] = int(k);
-      if (isFace && p.list && (p.name == "vertex_indices" || p.name == "vertex_index")) indices = int(k);
+      if (isFace && p.list && (p.name == "vertex_indices" || p.name == "vertex_index"))
+        indices = int(k);
     }
     if (isVertex) {
       if (vertexCount >= 0) fail("two vertex elements");
-      if (axis[0] < 0 || axis[1] < 0 || axis[2] < 0) fail("the vertex element needs properties x, y and z");
+      if (axis[0] < 0 || axis[1] < 0 || axis[2] < 0)
+        fail("the vertex element needs properties x, y and z");
       vertexCount = e.count;
       mesh.vertices.reserve(size_t(e.count));
     }
@@ -208,7 +227,8 @@ TriangleMesh parsePly(string_view text) {
         const double n = in.get(p.countType, where);
         if (!(n >= 0) || n > 1e6) fail(where + "bad list length " + numberText(n));
         const size_t len = size_t(n);
-        if (!in.ascii() && len * plySize(p.type) > in.bytesLeft()) fail(where + "the file ends inside a list");
+        if (!in.ascii() && len * plySize(p.type) > in.bytesLeft())
+          fail(where + "the file ends inside a list");
         const bool faceList = int(k) == indices;
         if (faceList) {
           if (len < 3) fail(where + "a face needs at least 3 vertices, got " + std::to_string(len));
@@ -218,7 +238,8 @@ TriangleMesh parsePly(string_view text) {
           const double v = in.get(p.type, where);
           if (!faceList) continue;
           if (!(v >= 0) || v >= double(vertexCount))
-            fail(where + "vertex index " + numberText(v) + " out of range (" + std::to_string(vertexCount) + " vertices)");
+            fail(where + "vertex index " + numberText(v) + " out of range (" +
+                 std::to_string(vertexCount) + " vertices)");
           face.push_back(int(v));
         }
         if (faceList) addFace(mesh, face);

@@ -20,12 +20,14 @@ TriangleMesh mergeCorners(const std::vector<Eigen::Vector3d>& corners) {
     const auto& v = corners[i];
     auto it = unique.find({v.x(), v.y(), v.z()});
     if (it == unique.end()) {
-      it = unique.emplace(std::array<double, 3>{v.x(), v.y(), v.z()}, int(mesh.vertices.size())).first;
+      it = unique.emplace(std::array<double, 3>{v.x(), v.y(), v.z()}, int(mesh.vertices.size()))
+               .first;
       mesh.vertices.push_back(v);
     }
     index[i] = it->second;
   }
-  for (size_t t = 0; t + 2 < index.size(); t += 3) mesh.triangles.push_back({index[t], index[t + 1], index[t + 2]});
+  for (size_t t = 0; t + 2 < index.size(); t += 3)
+    mesh.triangles.push_back({index[t], index[t + 1], index[t + 2]});
   return mesh;
 }
 

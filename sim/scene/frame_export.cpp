@@ -79,7 +79,8 @@ Frame parseBinaryFrame(const std::string& d, const std::string& name) {
   if (!std::isfinite(f.time)) frameFail(name, "the time is not finite");
   // Each body takes at least its 4-byte count: a count the bytes cannot hold fails here.
   if (std::uint64_t(bodies) * 4 > d.size() - pos)
-    frameFail(name, "the header declares " + std::to_string(bodies) + " bodies, more than the file holds");
+    frameFail(name, "the header declares " + std::to_string(bodies) +
+                        " bodies, more than the file holds");
   f.bodies.resize(bodies);
   for (std::uint32_t b = 0; b < bodies; ++b) {
     need(4, "a body header");
@@ -95,7 +96,8 @@ Frame parseBinaryFrame(const std::string& d, const std::string& name) {
     pos += size_t(n) * 12;
     if (!x.allFinite()) frameFail(name, "body " + std::to_string(b) + " has a non-finite position");
   }
-  if (pos != d.size()) frameFail(name, std::to_string(d.size() - pos) + " bytes after the last body");
+  if (pos != d.size())
+    frameFail(name, std::to_string(d.size() - pos) + " bytes after the last body");
   return f;
 }
 
@@ -135,7 +137,8 @@ Frame parseObjFrame(const std::string& d, const std::string& name) {
       f.bodies.emplace_back();
       points.emplace_back();
       f.bodies.back().name = std::string(line.substr(line.find('o') + 1));
-      if (!f.bodies.back().name.empty() && f.bodies.back().name[0] == ' ') f.bodies.back().name.erase(0, 1);
+      if (!f.bodies.back().name.empty() && f.bodies.back().name[0] == ' ')
+        f.bodies.back().name.erase(0, 1);
       base = int(vertices);
     } else if (tokens[0] == "v") {
       if (f.bodies.empty()) frameFail(name, where + "a vertex before the first object");
@@ -175,7 +178,8 @@ Frame parseObjFrame(const std::string& d, const std::string& name) {
 
 Frame parseFrame(const std::string& bytes, FrameFormat format, const std::string& name) {
   if (format == FrameFormat::Binary) {
-    if (bytes.size() < 8 || bytes.compare(0, 8, "SBFRAME1") != 0) frameFail(name, "not a binary softbody frame");
+    if (bytes.size() < 8 || bytes.compare(0, 8, "SBFRAME1") != 0)
+      frameFail(name, "not a binary softbody frame");
     return parseBinaryFrame(bytes, name);
   }
   return parseObjFrame(bytes, name);

@@ -123,6 +123,7 @@ class Fields {
     for (auto it = j_.begin(); it != j_.end(); ++it)
       if (!used_.count(it.key())) fail(it.key(), "unknown field");
   }
+
  private:
   const json& j_;
   std::string where_, file_;
@@ -323,7 +324,9 @@ class CheckedSax {
   bool boolean(bool v) { return value() && dom_.boolean(v); }
   bool number_integer(json::number_integer_t v) { return value() && dom_.number_integer(v); }
   bool number_unsigned(json::number_unsigned_t v) { return value() && dom_.number_unsigned(v); }
-  bool number_float(json::number_float_t v, const std::string& s) { return value() && dom_.number_float(v, s); }
+  bool number_float(json::number_float_t v, const std::string& s) {
+    return value() && dom_.number_float(v, s);
+  }
   bool string(std::string& v) { return value() && dom_.string(v); }
   bool binary(json::binary_t& v) { return value() && dom_.binary(v); }
   bool start_object(std::size_t n) {
@@ -356,8 +359,8 @@ class CheckedSax {
   }
   bool parse_error(std::size_t position, const std::string&, const nlohmann::detail::exception& e) {
     const std::string field = path();
-    error_ = "line " + std::to_string(lineAt(position)) + ": " + (field.empty() ? "" : field + ": ") +
-             "invalid JSON (" + e.what() + ")";
+    error_ = "line " + std::to_string(lineAt(position)) + ": " +
+             (field.empty() ? "" : field + ": ") + "invalid JSON (" + e.what() + ")";
     return false;
   }
   const std::string& error() const { return error_; }

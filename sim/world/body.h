@@ -59,7 +59,7 @@ struct BodyModel {
   // wᵢ = mᵢ / (number of clusters of i), × kPinnedWeightFactor for pinned particles (#P, kg):
   // with these weights the clusters conserve momentum (bodies without pins).
   Eigen::VectorXf matchWeight;
-  Eigen::VectorXf invCount;     // 1 / (number of clusters of i), #P
+  Eigen::VectorXf invCount;                   // 1 / (number of clusters of i), #P
   std::vector<ClusterRestModel> clusterRest;  // #C
   // Per membership (parallel to clusterMembers.items): q⁰ = r − rc (#M×3, m) and the member's
   // matching weight (#M, kg).
@@ -93,7 +93,8 @@ struct BodyModel {
 
 // Builds the model of a new body from its (validated) definition, with the surface topology
 // built by the validation.
-std::shared_ptr<BodyModel> buildBodyModel(const BodyDef& def, mesh::SurfaceTopology surfaceTopology);
+std::shared_ptr<BodyModel> buildBodyModel(const BodyDef& def,
+                                          mesh::SurfaceTopology surfaceTopology);
 // The same body with other clusters (everything but the clusters is shared with `base`).
 // Throws std::invalid_argument on a bad cluster definition.
 std::shared_ptr<BodyModel> withClusters(const BodyModel& base, const ClusterDef& clusters);

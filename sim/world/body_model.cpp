@@ -9,7 +9,7 @@ namespace sb {
 
 namespace {
 
-constexpr int kMembersPerTask = 8192;  // cluster members per moment task
+constexpr int kMembersPerTask = 8192;        // cluster members per moment task
 constexpr double kSleepSpeedPerSize = 0.05;  // 1/s: sleep speed per metre of size
 constexpr double kMaxSleepSpeed = 0.05;      // m/s
 
@@ -82,8 +82,8 @@ void buildClusters(BodyModel& m, const ClusterDef& clusters) {
   }
   const float* memberRest[3] = {m.memberRest.col(0).data(), m.memberRest.col(1).data(),
                                 m.memberRest.col(2).data()};
-  m.batches = buildClusterBatches(m.clusterMembers, memberRest, m.memberWeight.data(),
-                                  m.clusterRest);
+  m.batches =
+      buildClusterBatches(m.clusterMembers, memberRest, m.memberWeight.data(), m.clusterRest);
 }
 
 }  // namespace

@@ -171,12 +171,13 @@ bool ClusterState::updateCluster(const BodyModel& m, const BodyParams& params, i
   return !goal.L.allFinite() || !goal.Q.allFinite() || !goal.t.allFinite();
 }
 
-bool ClusterState::updateBatch(const BodyModel& m, const BodyParams& params, int k,
-                               const MatX3f& x, double h) {
+bool ClusterState::updateBatch(const BodyModel& m, const BodyParams& params, int k, const MatX3f& x,
+                               double h) {
   const ClusterBatch& batch = m.batches[size_t(k)];
   ClusterBatchLanes& lanes = batchLanes_[size_t(k)];
   const float* xs[3] = {x.col(0).data(), x.col(1).data(), x.col(2).data()};
-  const ClusterBatchGoals goals = matchClusterBatch(batch, batchShape_[size_t(k)], xs, params, lanes);
+  const ClusterBatchGoals goals =
+      matchClusterBatch(batch, batchShape_[size_t(k)], xs, params, lanes);
   bool bad = false;
   for (int l = 0; l < batch.count; ++l) {
     const int c = batch.cluster[l];
@@ -228,9 +229,9 @@ bool ClusterState::projectWholeBody(const BodyModel& m, const BodyParams& params
     plasticRest_ = next;
     std::vector<int> all(static_cast<size_t>(n));
     for (int i = 0; i < n; ++i) all[size_t(i)] = i;
-    plasticBodyRest_ = buildClusterRest(all.data(), n, plasticRest_.col(0).data(),
-                                        plasticRest_.col(1).data(), plasticRest_.col(2).data(),
-                                        m.bodyWeight.data());
+    plasticBodyRest_ =
+        buildClusterRest(all.data(), n, plasticRest_.col(0).data(), plasticRest_.col(1).data(),
+                         plasticRest_.col(2).data(), m.bodyWeight.data());
     plasticBodyShape_ = deriveClusterShape(plasticBodyRest_, Mat3::Identity(), quadratic);
   }
   const MatX3f& rest = plastic ? plasticRest_ : m.rest;
@@ -246,8 +247,7 @@ bool ClusterState::projectWholeBody(const BodyModel& m, const BodyParams& params
   if (!fit.finite) return true;
   bodyRotation_ = fit.rotation;
   bodyRef_ = fit.centre.cast<float>();
-  const GoalTransform goal =
-      goalTransform(fit, sum, bodyRest, bodyShape, Mat3::Identity(), params);
+  const GoalTransform goal = goalTransform(fit, sum, bodyRest, bodyShape, Mat3::Identity(), params);
   const PositionColumns p{x.col(0).data(), x.col(1).data(), x.col(2).data()};
   const RestColumns r{rest.col(0).data(), rest.col(1).data(), rest.col(2).data()};
   return projectOntoTransform(p, r, 0, n, goal, quadratic, float(params.alpha)) != 0;

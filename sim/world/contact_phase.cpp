@@ -254,10 +254,9 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
     const bool deep =
         deepRound || std::binary_search(scratch.deepPairs.begin(), scratch.deepPairs.end(),
                                         std::make_pair(p.probe, p.obstacle));
-    scratch.pairDeep[size_t(k)] =
-        findContacts(contactScratch[size_t(p.probe)].geometry,
-                     contactScratch[size_t(p.obstacle)].geometry, float(h), deep,
-                     pairContacts[size_t(k)]);
+    scratch.pairDeep[size_t(k)] = findContacts(contactScratch[size_t(p.probe)].geometry,
+                                               contactScratch[size_t(p.obstacle)].geometry,
+                                               float(h), deep, pairContacts[size_t(k)]);
   });
   scratch.deepPairs.clear();
   for (size_t k = 0; k < contactPairs.size(); ++k) {
@@ -305,9 +304,8 @@ int runSolvePhase(const WorkLayout& layout, const ContactSettings& settings, dou
   }
   bodies.resize(solverSlot.size());
   const int minParallel = layout.particles >= kMinParallelBodyWork ? 2 : INT32_MAX;
-  parallelFor(static_cast<int>(solverSlot.size()), minParallel, [&](int k) {
-    prepareBody(slots[size_t(solverSlot[size_t(k)])], bodies[size_t(k)]);
-  });
+  parallelFor(static_cast<int>(solverSlot.size()), minParallel,
+              [&](int k) { prepareBody(slots[size_t(solverSlot[size_t(k)])], bodies[size_t(k)]); });
 
   // Every contact point: body–body in pair order, then static in body order; restitution the
   // larger of the two sides' (as Box2D), friction the body–body or the collider's.

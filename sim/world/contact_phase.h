@@ -93,7 +93,7 @@ struct ContactScratch {
   std::vector<SolverBody> solverBodies;
   std::vector<int> solverIndex, solverSlot;  // per slot (−1: not in the solve), per solver body
   std::vector<ContactPoint> points;
-  std::vector<int> islandParent;                              // union-find over solver bodies
+  std::vector<int> islandParent;                             // union-find over solver bodies
   std::vector<std::vector<int>> islandBodies, islandPoints;  // per island
   std::vector<Warm> warm, warmNext;                          // sorted by key
   // After the solve: slot pairs joined by a body–body contact this sub-step (for the sleep

@@ -57,7 +57,8 @@ GoalsTimes runGoalsPhase(const WorkLayout& layout, double h, std::vector<BodySlo
                   const int taskCount =
                       m.taskStart[size_t(gc.cluster) + 1] - m.taskStart[size_t(gc.cluster)];
                   if (taskCount == 1) sum = taskMoments(gc.firstTask);
-                  for (int t = 1; t < taskCount; ++t) sum += scratch.partial[size_t(gc.firstTask + t)];
+                  for (int t = 1; t < taskCount; ++t)
+                    sum += scratch.partial[size_t(gc.firstTask + t)];
                 }
                 scratch.clusterBad[size_t(i)] = b.state.clusters.updateCluster(
                     m, b.params, gc.cluster, sum, h, &scratch.plasticSeconds[size_t(i)]);

@@ -43,8 +43,7 @@ constexpr double kMinTurn = 1e-3;
 
 // Moves particles [begin, end) of one body α of the way to the blend of their clusters' goals;
 // returns true if a non-finite value appeared.
-bool projectBlock(const BodyModel& m, BodyState& s, const BodyParams& params, int begin,
-                  int end) {
+bool projectBlock(const BodyModel& m, BodyState& s, const BodyParams& params, int begin, int end) {
   const PositionColumns p{s.x.col(0).data(), s.x.col(1).data(), s.x.col(2).data()};
   const float* rx = m.rest.col(0).data();
   const float* ry = m.rest.col(1).data();
@@ -136,7 +135,7 @@ void runPredictPhase(const WorkLayout& layout, const Vec3& gravity, double h,
                 // x̂ = x + h·v + h²·g, with the tangential h·ω × r of the body's turn replaced by
                 // the rotation (R − I)·r, r = x − xc; v̂ = v + (R − I)(v − vc): the velocities turn
                 // with the body.
-                Eigen::Matrix3f toRotation = Eigen::Matrix3f::Zero();  // R − I − h·[ω]×
+                Eigen::Matrix3f toRotation = Eigen::Matrix3f::Zero();    // R − I − h·[ω]×
                 Eigen::Matrix3f turnVelocity = Eigen::Matrix3f::Zero();  // R − I
                 if (turn > kMinTurn) {
                   const Mat3 RmI =
@@ -191,7 +190,8 @@ void runWholeBodyPhase(const WorkLayout& layout, std::vector<BodySlot>& slots,
                 const int s = order[size_t(k)];
                 BodySlot& b = slots[size_t(s)];
                 if (!b.model->wholeBodyLevel) return;
-                if (b.state.clusters.projectWholeBody(*b.model, b.params, b.state.x)) bad[size_t(s)] = 1;
+                if (b.state.clusters.projectWholeBody(*b.model, b.params, b.state.x))
+                  bad[size_t(s)] = 1;
                 for (int p : b.model->pinned) b.state.x.row(p) = b.model->startPositions.row(p);
               });
 }
@@ -216,7 +216,8 @@ void runVelocitiesPhase(const WorkLayout& layout, const Vec3& gravity, double h,
                 // is shorter than its tangent (by sin(hω)/(hω)): put the body's spin back to what
                 // it was before the sub-step.
                 const int n = m.particleCount();
-                const RigidMotion rm = rigidMotion(columnsOf(s.x), columnsOf(s.v), m.mass.data(), n);
+                const RigidMotion rm =
+                    rigidMotion(columnsOf(s.x), columnsOf(s.v), m.mass.data(), n);
                 const Eigen::Vector3f dw =
                     (rm.inverseInertia * (s.spin - rm.angularMomentum)).cast<float>();
                 if (dw.isZero()) return;
@@ -225,7 +226,8 @@ void runVelocitiesPhase(const WorkLayout& layout, const Vec3& gravity, double h,
                 const Eigen::Vector3f xc = rm.centre.cast<float>();
                 double sum[3] = {0, 0, 0};
                 for (int i = 0; i < n; ++i)
-                  for (int a = 0; a < 3; ++a) sum[a] += double(m.mass[i]) * double(s.x(i, a) - xc[a]);
+                  for (int a = 0; a < 3; ++a)
+                    sum[a] += double(m.mass[i]) * double(s.x(i, a) - xc[a]);
                 const Eigen::Vector3f shift =
                     dw.cross((Vec3(sum[0], sum[1], sum[2]) / m.totalMass).cast<float>());
                 const Eigen::Matrix3f K = skew(dw);

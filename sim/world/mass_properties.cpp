@@ -22,8 +22,7 @@ MassProperties massProperties(const PointColumns& x, const float* mass, int coun
   return mp;
 }
 
-RigidMotion rigidMotion(const PointColumns& x, const PointColumns& v, const float* w,
-                        int count) {
+RigidMotion rigidMotion(const PointColumns& x, const PointColumns& v, const float* w, int count) {
   const float *px = x.c[0], *py = x.c[1], *pz = x.c[2];
   const float *vx = v.c[0], *vy = v.c[1], *vz = v.c[2];
   const float ox = px[0], oy = py[0], oz = pz[0];

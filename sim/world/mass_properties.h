@@ -29,9 +29,9 @@ MassProperties massProperties(const PointColumns& x, const float* mass, int coun
 // flat or collinear sets). Weights are masses, or masses with pinned particles made
 // immovable; then the rigid motion is what the pins allow.
 struct RigidMotion {
-  Vec3 centre = Vec3::Zero();    // xc, m
-  Vec3 velocity = Vec3::Zero();  // vc, m/s
-  Vec3 omega = Vec3::Zero();     // ω, rad/s
+  Vec3 centre = Vec3::Zero();           // xc, m
+  Vec3 velocity = Vec3::Zero();         // vc, m/s
+  Vec3 omega = Vec3::Zero();            // ω, rad/s
   Vec3 angularMomentum = Vec3::Zero();  // L about xc, kg·m²/s (weights as masses)
   Mat3 inverseInertia = Mat3::Zero();   // about xc, 1/(kg·m²)
 };

@@ -23,11 +23,11 @@ std::string formatNumber(double v);
 
 namespace limits {
 // World settings.
-inline constexpr ParamRange timeStep{1e-7, 10.0};    // s, per step() (and per dt of step(dt))
-inline constexpr ParamRange substeps{1, 1000};       // sub-steps per step()
-inline constexpr ParamRange gravityNorm{0.0, 1e4};   // m/s², length of the gravity vector
-inline constexpr ParamRange friction{0.0, 1000.0};   // μ, colliders and body–body contact
-inline constexpr ParamRange restitution{0.0, 1.0};   // e, colliders and bodies
+inline constexpr ParamRange timeStep{1e-7, 10.0};   // s, per step() (and per dt of step(dt))
+inline constexpr ParamRange substeps{1, 1000};      // sub-steps per step()
+inline constexpr ParamRange gravityNorm{0.0, 1e4};  // m/s², length of the gravity vector
+inline constexpr ParamRange friction{0.0, 1000.0};  // μ, colliders and body–body contact
+inline constexpr ParamRange restitution{0.0, 1.0};  // e, colliders and bodies
 inline constexpr ParamRange restitutionThreshold{0.0, 1e4};  // m/s
 // Body parameters.
 inline constexpr ParamRange alpha{0.0, 1.0};
@@ -38,7 +38,7 @@ inline constexpr ParamRange plasticCreep{0.0, 1e6};  // 1/s
 // ‖Sᵖ − I‖₂ ≤ 2 (a stretch up to ×3 along an axis, as the fits' own bound): beyond, Sᵖ (det 1)
 // is so anisotropic that A_qq⁻¹ of the rest shape amplifies round-off into far-away goals.
 inline constexpr ParamRange plasticMax{0.0, 2.0};
-inline constexpr ParamRange bodyMass{1e-9, 1e9};      // kg, a body's total mass
+inline constexpr ParamRange bodyMass{1e-9, 1e9};       // kg, a body's total mass
 inline constexpr ParamRange particleMass{1e-12, 1e9};  // kg, one particle's mass
 inline constexpr ParamRange cellSize{1e-6, 1e6};       // m, grid clusters
 inline constexpr ParamRange overlap{0.0, 1e6};         // m, grid clusters

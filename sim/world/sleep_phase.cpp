@@ -15,8 +15,7 @@ int findRoot(std::vector<int>& parent, int i) {
 }  // namespace
 
 bool runSleepPhase(double h, bool enabled, std::vector<BodySlot>& slots,
-                   const std::vector<int>& awake,
-                   const std::vector<std::pair<int, int>>& touching,
+                   const std::vector<int>& awake, const std::vector<std::pair<int, int>>& touching,
                    const std::vector<char>& held, SleepScratch& scratch) {
   bool candidate = false;
   for (int s : awake) {

@@ -32,8 +32,7 @@ struct SleepScratch {
 // `held`: per slot, 1 when a drag holds the body. With `enabled` false only the clocks run.
 // Returns whether some body fell asleep.
 bool runSleepPhase(double h, bool enabled, std::vector<BodySlot>& slots,
-                   const std::vector<int>& awake,
-                   const std::vector<std::pair<int, int>>& touching,
+                   const std::vector<int>& awake, const std::vector<std::pair<int, int>>& touching,
                    const std::vector<char>& held, SleepScratch& scratch);
 
 // Wakes the body in slot s and every body that fell asleep in the same island (`order`: every

@@ -27,9 +27,9 @@ enum class Phase : int {
 
 inline constexpr int kPhaseCount = 12;
 inline constexpr std::array<Phase, kPhaseCount> kPhases = {
-    Phase::External, Phase::Predict,  Phase::Goals,      Phase::Plasticity,
+    Phase::External, Phase::Predict,   Phase::Goals,      Phase::Plasticity,
     Phase::Project,  Phase::WholeBody, Phase::Velocities, Phase::Contacts,
-    Phase::Solve,    Phase::Damping,  Phase::Check,      Phase::Sleep,
+    Phase::Solve,    Phase::Damping,   Phase::Check,      Phase::Sleep,
 };
 
 // Lower-case name ("goals"), used as label and as key in files.

@@ -44,7 +44,8 @@ WorkLayout buildWorkLayout(const std::vector<BodySlot>& slots, const std::vector
     appendBlocks(layout.blocks, s, n, block);
     const int groups = m.groups.count();
     appendBlocks(layout.groupBlocks, s, groups, kClusteredParticlesPerBlock);
-    if (path.grouped) appendBlocks(layout.momentGroupBlocks, s, groups, kClusteredParticlesPerBlock);
+    if (path.grouped)
+      appendBlocks(layout.momentGroupBlocks, s, groups, kClusteredParticlesPerBlock);
     layout.members += static_cast<long long>(m.clusterMembers.items.size());
     layout.particles += n;
   }

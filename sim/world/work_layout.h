@@ -42,12 +42,12 @@ struct GlobalBatch {
 struct WorkLayout {
   std::vector<GlobalTask> tasks;
   std::vector<int> splitTasks;  // tasks of clusters with several tasks (summed in a first pass)
-  std::vector<GlobalCluster> clusters;     // clusters not in a batch
+  std::vector<GlobalCluster> clusters;  // clusters not in a batch
   std::vector<GlobalBatch> batches;
   std::vector<ParticleBlock> blocks;       // particles, for integration
   std::vector<ParticleBlock> groupBlocks;  // the same over particle groups (begin, end: groups)
   std::vector<ParticleBlock> momentGroupBlocks;  // group blocks of bodies with grouped moments
-  long long members = 0, particles = 0;           // totals over all bodies
+  long long members = 0, particles = 0;          // totals over all bodies
 };
 
 // The work lists of the bodies `order` (slots in creation order), each on its current path.

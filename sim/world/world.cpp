@@ -133,13 +133,11 @@ void World::Data::substep(double h, StepProfile& prof) {
   prof[Phase::Plasticity] += goals.plasticity;
   timed(Phase::Project, [&] { runProjectPhase(layout, slots, awake, blockBad, bad); });
   timed(Phase::WholeBody, [&] { runWholeBodyPhase(layout, slots, awake, bad); });
-  timed(Phase::Velocities,
-        [&] { runVelocitiesPhase(layout, settings.gravity, h, slots, awake); });
+  timed(Phase::Velocities, [&] { runVelocitiesPhase(layout, settings.gravity, h, slots, awake); });
   const ContactSettings contact{settings.bodyContact, float(settings.contactFriction),
                                 float(settings.restitutionThreshold), settings.gravity};
-  timed(Phase::Contacts, [&] {
-    runContactsPhase(layout, contact, h, slots, order, colliders, contactScratch);
-  });
+  timed(Phase::Contacts,
+        [&] { runContactsPhase(layout, contact, h, slots, order, colliders, contactScratch); });
   timed(Phase::Solve, [&] {
     contactCount = runSolvePhase(layout, contact, h, slots, order, colliders, contactScratch);
   });
@@ -148,8 +146,7 @@ void World::Data::substep(double h, StepProfile& prof) {
   timed(Phase::Damping, [&] { runDampingPhase(layout, slots, awake); });
   timed(Phase::Check, [&] { resetFailedBodies(); });
   timed(Phase::Sleep, [&] {
-    if (runSleepPhase(h, settings.sleep, slots, awake, contactScratch.touching, held,
-                      sleepScratch))
+    if (runSleepPhase(h, settings.sleep, slots, awake, contactScratch.touching, held, sleepScratch))
       awakeDirty = true;
   });
 }
@@ -161,7 +158,8 @@ void World::Data::resetFailedBodies() {
     BodySlot& b = slots[size_t(s)];
     resetBodyState(*b.model, b.state);
     events.push_back({handleOf(s), "body '" + b.model->name + "' produced NaN/Inf (time " +
-                                       formatNumber(time) + " s); it was reset to its start state"});
+                                       formatNumber(time) +
+                                       " s); it was reset to its start state"});
   }
 }
 
@@ -285,8 +283,8 @@ BodyHandle World::addBody(const BodyDef& def) {
       for (int i : def.surface[t])
         if (i < 0 || i >= n)
           throw std::invalid_argument("surface[" + std::to_string(t) + "]: particle index " +
-                                      std::to_string(i) + " out of range [0, " +
-                                      std::to_string(n) + ")");
+                                      std::to_string(i) + " out of range [0, " + std::to_string(n) +
+                                      ")");
     mesh::TriangleMesh surface{def.positions, def.surface};
     try {
       topology = mesh::validateClosedSurface(surface, def.name, {/*allowUnusedVertices=*/true});
@@ -335,10 +333,9 @@ void World::removeBody(BodyHandle h) {
     it = it->second.body == h ? d_->drags.erase(it) : std::next(it);
   // Forces queued for the removed body die with it (step() must not meet a stale handle).
   auto& forces = d_->forces;
-  forces.erase(
-      std::remove_if(forces.begin(), forces.end(),
-                     [&](const QueuedForce& f) { return f.body == h; }),
-      forces.end());
+  forces.erase(std::remove_if(forces.begin(), forces.end(),
+                              [&](const QueuedForce& f) { return f.body == h; }),
+               forces.end());
 }
 
 bool World::contains(BodyHandle h) const {

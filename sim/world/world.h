@@ -27,10 +27,10 @@
 #include <string>
 #include <vector>
 
+#include "sim/base/types.h"
 #include "sim/world/body_def.h"
 #include "sim/world/collider.h"
 #include "sim/world/step_phases.h"
-#include "sim/base/types.h"
 
 namespace sb {
 
@@ -147,7 +147,7 @@ class World {
   double time() const;   // seconds simulated since creation or reset
   const StepProfile& lastProfile() const;  // phases of the last step() call
   int lastContactCount() const;  // body–body contacts that carried load in the last sub-step
-  std::vector<WorldEvent> takeEvents();    // returns and clears pending events
+  std::vector<WorldEvent> takeEvents();  // returns and clears pending events
 
   // ---- sleep (WorldSettings::sleep) ----
   bool isSleeping(BodyHandle body) const;

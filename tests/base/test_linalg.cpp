@@ -14,9 +14,9 @@ TEST(Linalg, PseudoInverseOfAnInvertibleMatrixIsItsInverse) {
   EXPECT_LT((symmetricPseudoInverse<3>(A, 1e-9) * A - Eigen::Matrix3d::Identity()).norm(), 1e-12);
   Eigen::Matrix<double, 9, 9> B = Eigen::Matrix<double, 9, 9>::Random();
   B = B * B.transpose() + Eigen::Matrix<double, 9, 9>::Identity();
-  EXPECT_LT((symmetricPseudoInverse<9>(B, 1e-12) * B - Eigen::Matrix<double, 9, 9>::Identity())
-                .norm(),
-            1e-9);
+  EXPECT_LT(
+      (symmetricPseudoInverse<9>(B, 1e-12) * B - Eigen::Matrix<double, 9, 9>::Identity()).norm(),
+      1e-9);
 }
 
 TEST(Linalg, PseudoInverseOfASingularMatrixSatisfiesThePenroseConditions) {

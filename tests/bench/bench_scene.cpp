@@ -4,8 +4,8 @@
 // over the timed steps, and steps_per_s for simulation + deform together.
 #include <benchmark/benchmark.h>
 
-#include "sim/mesh/mesh_io.h"
 #include "sim/base/parallel.h"
+#include "sim/mesh/mesh_io.h"
 #include "sim/scene/scene.h"
 #include "sim/scene/scene_runner.h"
 

@@ -8,8 +8,8 @@
 #include <random>
 
 #include "../sim/tet_bar.h"
-#include "sim/world/matching/cluster_batch.h"
 #include "sim/base/parallel.h"
+#include "sim/world/matching/cluster_batch.h"
 #include "sim/world/world.h"
 #include "tests/draws.h"
 
@@ -159,8 +159,8 @@ void BM_SmallClusterKernel(benchmark::State& state) {
   const float* memberRestCols[3] = {memberRest[0].data(), memberRest[1].data(),
                                     memberRest[2].data()};
   // Batches index the private copies.
-  std::vector<ClusterBatch> batches =
-      buildClusterBatches(Csr{memberStart, copies}, memberRestCols, memberWeight.data(), restModels);
+  std::vector<ClusterBatch> batches = buildClusterBatches(Csr{memberStart, copies}, memberRestCols,
+                                                          memberWeight.data(), restModels);
   std::vector<ClusterBatchShape> shapes(batches.size());
   std::vector<ClusterBatchLanes> start(batches.size());
   for (size_t b = 0; b < batches.size(); ++b)

@@ -13,11 +13,11 @@
 #include <vector>
 
 #include "sim/cage/embedding.h"
-#include "sim/mesh/mesh_io.h"
 #include "sim/cage/mvc.h"
+#include "sim/mesh/mesh_io.h"
 #include "sim/mesh/normals.h"
-#include "tests/mesh/mesh_fixtures.h"
 #include "tests/draws.h"
+#include "tests/mesh/mesh_fixtures.h"
 
 namespace {
 
@@ -54,9 +54,10 @@ void runKernel(benchmark::State& state, const TriangleMesh& cage, const std::vec
     benchmark::DoNotOptimize(sink.data());
     benchmark::ClobberMemory();
   }
-  const double work = static_cast<double>(cage.triangles.size()) * static_cast<double>(points.size());
-  state.counters["ns_per_tri_point"] =
-      benchmark::Counter(work, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  const double work =
+      static_cast<double>(cage.triangles.size()) * static_cast<double>(points.size());
+  state.counters["ns_per_tri_point"] = benchmark::Counter(
+      work, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
   state.counters["cage_vertices"] = static_cast<double>(m);
   state.counters["cage_triangles"] = static_cast<double>(cage.triangles.size());
   state.counters["points"] = static_cast<double>(points.size());
@@ -70,7 +71,11 @@ void BM_BindBox(benchmark::State& state) {
   const auto points = randomPointsInBox(npts, Vec3(0.01, 0.01, 0.01), Vec3(0.29, 0.29, 0.99), 1);
   runKernel(state, cage, points);
 }
-BENCHMARK(BM_BindBox)->ArgsProduct({{1, 2, 3, 4}, {1, 2}})->ArgNames({"k", "threads"})->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_BindBox)
+    ->ArgsProduct({{1, 2, 3, 4}, {1, 2}})
+    ->ArgNames({"k", "threads"})
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
 
 void BM_BindRealMesh(benchmark::State& state) {
   const std::string dir = SOFTBODY_TEST_MESH_DIR;
@@ -80,7 +85,11 @@ void BM_BindRealMesh(benchmark::State& state) {
   state.SetLabel(bunny ? "bunny in bunny_cage" : "suzanne in suzanne_cage");
   runKernel(state, cage, mesh.vertices);
 }
-BENCHMARK(BM_BindRealMesh)->ArgsProduct({{0, 1}, {1, 2}})->ArgNames({"mesh", "threads"})->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_BindRealMesh)
+    ->ArgsProduct({{0, 1}, {1, 2}})
+    ->ArgNames({"mesh", "threads"})
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
 
 // The full bind (validation, weights, statistics, storage) of the real meshes.
 void BM_BindMeanValueFull(benchmark::State& state) {
@@ -93,11 +102,17 @@ void BM_BindMeanValueFull(benchmark::State& state) {
     Embedding e = bindMeanValue(mesh.vertices, cage, o);
     benchmark::DoNotOptimize(e.nonZeros());
   }
-  const double work = static_cast<double>(cage.triangles.size()) * static_cast<double>(mesh.vertices.size());
-  state.counters["ns_per_tri_point"] =
-      benchmark::Counter(work, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  const double work =
+      static_cast<double>(cage.triangles.size()) * static_cast<double>(mesh.vertices.size());
+  state.counters["ns_per_tri_point"] = benchmark::Counter(
+      work, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
 }
-BENCHMARK(BM_BindMeanValueFull)->Arg(1)->Arg(2)->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_BindMeanValueFull)
+    ->Arg(1)
+    ->Arg(2)
+    ->ArgName("threads")
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
 
 // ---------------------------------------------------------------------------------------------
 // Deform: 100k points inside a 242-vertex box cage (6×6×7 segments).
@@ -135,8 +150,8 @@ DeformSetup& deformSetup() {
       const double a = 0.8 * v.z();  // twist about z, plus a bend in x
       const Vec3 c(0.5, 0.5, 0.0);
       const Vec3 r = v - c;
-      const Vec3 tw(c.x() + std::cos(a) * r.x() - std::sin(a) * r.y(), c.y() + std::sin(a) * r.x() + std::cos(a) * r.y(),
-                    v.z());
+      const Vec3 tw(c.x() + std::cos(a) * r.x() - std::sin(a) * r.y(),
+                    c.y() + std::sin(a) * r.x() + std::cos(a) * r.y(), v.z());
       moved.row(j) = (tw + Vec3(0.3 * v.z() * v.z(), 0.0, 0.0)).transpose();
     }
     s->movedCage = moved.cast<float>();
@@ -145,7 +160,8 @@ DeformSetup& deformSetup() {
   return *s;
 }
 
-double maxError(const sb::PointsRowMajor& out, const Eigen::Matrix<double, Eigen::Dynamic, 3>& exact, double L) {
+double maxError(const sb::PointsRowMajor& out,
+                const Eigen::Matrix<double, Eigen::Dynamic, 3>& exact, double L) {
   return (out.cast<double>() - exact).rowwise().norm().maxCoeff() / L;
 }
 
@@ -163,7 +179,12 @@ void BM_DeformDense(benchmark::State& state) {
   state.counters["nonzeros"] = static_cast<double>(s.dense.nonZeros());
   state.counters["MB_weights"] = static_cast<double>(s.dense.nonZeros()) * 4e-6;
 }
-BENCHMARK(BM_DeformDense)->Arg(1)->Arg(2)->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_DeformDense)
+    ->Arg(1)
+    ->Arg(2)
+    ->ArgName("threads")
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
 
 void BM_DeformSparse(benchmark::State& state) {
   DeformSetup& s = deformSetup();
@@ -182,12 +203,17 @@ void BM_DeformSparse(benchmark::State& state) {
   state.counters["nonzeros"] = static_cast<double>(emb.nonZeros());
   state.counters["max_row_L1"] = emb.stats().maxPrunedL1;
 }
-BENCHMARK(BM_DeformSparse)->ArgsProduct({{0, 1, 2}, {1, 2}})->ArgNames({"thr", "threads"})->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_DeformSparse)
+    ->ArgsProduct({{0, 1, 2}, {1, 2}})
+    ->ArgNames({"thr", "threads"})
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
 
 void BM_Normals(benchmark::State& state) {
   const TriangleMesh mesh = readMesh(std::string(SOFTBODY_TEST_MESH_DIR) + "/bunny.obj");
   sb::PointsRowMajor pos(static_cast<Eigen::Index>(mesh.vertices.size()), 3), nrm;
-  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) pos.row(static_cast<Eigen::Index>(i)) = mesh.vertices[i].cast<float>().transpose();
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
+    pos.row(static_cast<Eigen::Index>(i)) = mesh.vertices[i].cast<float>().transpose();
   for (auto _ : state) {
     computeVertexNormals(mesh.triangles, pos, nrm);
     benchmark::DoNotOptimize(nrm.data());

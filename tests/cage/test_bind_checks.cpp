@@ -25,12 +25,15 @@ class BindChecks : public sb::test_support::TempDirTest {
   void SetUp() override {
     TempDirTest::SetUp();
     cage_ = mesh::testing::makeBox(1, 1, 1);
-    for (int i = 0; i < 20; ++i) points_.emplace_back(0.1 + 0.04 * i, 0.3 + 0.01 * i, 0.7 - 0.02 * i);
+    for (int i = 0; i < 20; ++i)
+      points_.emplace_back(0.1 + 0.04 * i, 0.3 + 0.01 * i, 0.7 - 0.02 * i);
     options_.cacheDir = dir_.string();
     options_.storage = WeightStorage::Dense;
     options_.warning = [this](const std::string& w) { warnings_.push_back(w); };
   }
-  std::string cacheFile() const { return bindCachePath(dir_.string(), bindCacheKey(points_, cage_, options_)); }
+  std::string cacheFile() const {
+    return bindCachePath(dir_.string(), bindCacheKey(points_, cage_, options_));
+  }
   std::string read(const std::string& p) const {
     std::ifstream f(p, std::ios::binary);
     return std::string(std::istreambuf_iterator<char>(f), {});

@@ -32,8 +32,8 @@ struct ProcessResult {
 class Cli : public sb::test_support::TempDirTest {
  protected:
   ProcessResult run(const std::string& args) const {
-    const std::string cmd = std::string("'") + SOFTBODY_EXE + "' " + args + " > '" + path("stdout.txt") + "' 2> '" +
-                            path("stderr.txt") + "'";
+    const std::string cmd = std::string("'") + SOFTBODY_EXE + "' " + args + " > '" +
+                            path("stdout.txt") + "' 2> '" + path("stderr.txt") + "'";
     const int status = std::system(cmd.c_str());
     ProcessResult r;
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -46,11 +46,11 @@ class Cli : public sb::test_support::TempDirTest {
 const std::string kMeshDir = SOFTBODY_TEST_MESH_DIR;
 
 TEST_F(Cli, BindReportsStatistics) {
-  const ProcessResult r = run("bind --mesh " + kMeshDir + "/bunny.obj --cage " + kMeshDir + "/bunny_cage.obj --threads 2 --out " +
-                    path("w.sbw"));
+  const ProcessResult r = run("bind --mesh " + kMeshDir + "/bunny.obj --cage " + kMeshDir +
+                              "/bunny_cage.obj --threads 2 --out " + path("w.sbw"));
   ASSERT_EQ(r.code, 0) << r.err;
-  for (const char* key : {"time:", "storage:", "nonzeros", "min ", "max ", "negative", "sum error:",
-                          "linear precision:", "dense"})
+  for (const char* key : {"time:", "storage:", "nonzeros", "min ", "max ", "negative",
+                          "sum error:", "linear precision:", "dense"})
     EXPECT_NE(r.out.find(key), std::string::npos) << key << "\n" << r.out;
   EXPECT_NE(r.err.find("binding: 1839 / 1839"), std::string::npos) << r.err;  // progress on stderr
   const Embedding e = Embedding::load(path("w.sbw"));
@@ -74,7 +74,8 @@ TEST_F(Cli, BindUsesTheCache) {
 TEST_F(Cli, DeformAppliesTheCageMotion) {
   const TriangleMesh mesh = readMesh(kMeshDir + "/suzanne.obj");
   const TriangleMesh cage = readMesh(kMeshDir + "/suzanne_cage.obj");
-  const Eigen::Matrix3d A = (Eigen::Matrix3d() << 0.9, 0.2, 0.0, -0.1, 1.1, 0.3, 0.05, 0.0, 0.8).finished();
+  const Eigen::Matrix3d A =
+      (Eigen::Matrix3d() << 0.9, 0.2, 0.0, -0.1, 1.1, 0.3, 0.05, 0.0, 0.8).finished();
   const Vec3 t(1.0, 2.0, -0.5);
   TriangleMesh moved = cage;
   for (auto& v : moved.vertices) v = A * v + t;
@@ -84,8 +85,9 @@ TEST_F(Cli, DeformAppliesTheCageMotion) {
   points.vertices = mesh.vertices;
   writeObj(path("points.obj"), points);
   for (const std::string& m : {kMeshDir + "/suzanne.obj", path("points.obj")}) {
-    const ProcessResult r = run("deform --mesh " + m + " --cage " + kMeshDir + "/suzanne_cage.obj --deformed-cage " +
-                      path("moved.obj") + " --out " + path("out.obj"));
+    const ProcessResult r =
+        run("deform --mesh " + m + " --cage " + kMeshDir + "/suzanne_cage.obj --deformed-cage " +
+            path("moved.obj") + " --out " + path("out.obj"));
     ASSERT_EQ(r.code, 0) << r.err;
     const TriangleMesh out = readMesh(path("out.obj"));
     ASSERT_EQ(out.vertices.size(), mesh.vertices.size());
@@ -115,24 +117,26 @@ TEST_F(Cli, ErrorsAreClearAndNonZero) {
   TriangleMesh open = readMesh(cage);
   open.triangles.pop_back();
   writeObj(path("open.obj"), open);
-  r = run("deform --mesh " + mesh + " --cage " + path("open.obj") + " --deformed-cage " + path("open.obj") +
-          " --out " + path("o.obj"));
+  r = run("deform --mesh " + mesh + " --cage " + path("open.obj") + " --deformed-cage " +
+          path("open.obj") + " --out " + path("o.obj"));
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.err.find("not closed"), std::string::npos) << r.err;
   // Mismatched deformed cage: vertex count, then faces.
   TriangleMesh fewer = readMesh(cage);
   fewer.vertices.pop_back();
   writeObj(path("fewer.obj"), fewer);
-  r = run("deform --mesh " + mesh + " --cage " + cage + " --deformed-cage " + path("fewer.obj") + " --out " + path("o.obj"));
+  r = run("deform --mesh " + mesh + " --cage " + cage + " --deformed-cage " + path("fewer.obj") +
+          " --out " + path("o.obj"));
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.err.find("fewer.obj"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("163 vertices"), std::string::npos) << r.err;
   TriangleMesh refaced = readMesh(cage);
-  std::rotate(refaced.triangles[5].begin(), refaced.triangles[5].begin() + 1, refaced.triangles[5].end());
+  std::rotate(refaced.triangles[5].begin(), refaced.triangles[5].begin() + 1,
+              refaced.triangles[5].end());
   std::swap(refaced.triangles[5], refaced.triangles[6]);
   writeObj(path("refaced.obj"), refaced);
-  r = run("deform --mesh " + mesh + " --cage " + cage + " --deformed-cage " + path("refaced.obj") + " --out " +
-          path("o.obj"));
+  r = run("deform --mesh " + mesh + " --cage " + cage + " --deformed-cage " + path("refaced.obj") +
+          " --out " + path("o.obj"));
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.err.find("faces differ"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(path("o.obj")));
@@ -142,11 +146,12 @@ TEST_F(Cli, ErrorsAreClearAndNonZero) {
   EXPECT_NE(r.err.find("--cage"), std::string::npos) << r.err;
   r = run("bind --mesh " + mesh + " --cage " + cage + " --threads -3");
   EXPECT_EQ(r.code, 2);
-  r = run("deform --mesh " + mesh + " --cage " + cage + " --deformed-cage " + cage + " --out " + path("x.obj") +
-          " --storage weird");
+  r = run("deform --mesh " + mesh + " --cage " + cage + " --deformed-cage " + cage + " --out " +
+          path("x.obj") + " --storage weird");
   EXPECT_EQ(r.code, 2);
   // Unwritable output.
-  r = run("deform --mesh " + mesh + " --cage " + cage + " --deformed-cage " + cage + " --out " + path("no/dir/x.obj"));
+  r = run("deform --mesh " + mesh + " --cage " + cage + " --deformed-cage " + cage + " --out " +
+          path("no/dir/x.obj"));
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.err.find("no/dir/x.obj"), std::string::npos) << r.err;
   // Help.

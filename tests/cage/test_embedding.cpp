@@ -13,12 +13,12 @@
 
 #include <Eigen/Dense>
 
-#include "sim/mesh/closed_surface.h"
 #include "sim/cage/embedding.h"
+#include "sim/mesh/closed_surface.h"
 #include "sim/mesh/mesh_io.h"
 #include "sim/mesh/normals.h"
-#include "tests/mesh/mesh_fixtures.h"
 #include "tests/draws.h"
+#include "tests/mesh/mesh_fixtures.h"
 #include "tests/support/temp_dir_test.h"
 
 namespace sb::cage {
@@ -61,10 +61,12 @@ const RealCase& suzanne() {
 
 // A moved cage under x -> A x + t reproduces A x + t at every mesh vertex.
 void checkAffine(const RealCase& rc, const Embedding& e, double tolDouble, double tolFloat) {
-  const Eigen::Matrix3d A = (Eigen::Matrix3d() << 1.2, 0.3, -0.1, -0.2, 0.9, 0.4, 0.15, -0.25, 1.1).finished();
+  const Eigen::Matrix3d A =
+      (Eigen::Matrix3d() << 1.2, 0.3, -0.1, -0.2, 0.9, 0.4, 0.15, -0.25, 1.1).finished();
   const Vec3 t(0.5, -1.0, 2.0);
   MatX3d moved = toMatrix(rc.cage.vertices);
-  for (Eigen::Index j = 0; j < moved.rows(); ++j) moved.row(j) = (A * moved.row(j).transpose() + t).transpose();
+  for (Eigen::Index j = 0; j < moved.rows(); ++j)
+    moved.row(j) = (A * moved.row(j).transpose() + t).transpose();
   const double L = testing::diagonal(rc.cage) * A.norm();
   MatX3d out;
   e.deformDouble(moved, out);
@@ -75,7 +77,9 @@ void checkAffine(const RealCase& rc, const Embedding& e, double tolDouble, doubl
   for (std::size_t i = 0; i < rc.mesh.vertices.size(); ++i) {
     const Vec3 expect = A * rc.mesh.vertices[i] + t;
     errD = std::max(errD, (out.row(static_cast<Eigen::Index>(i)).transpose() - expect).norm() / L);
-    errF = std::max(errF, (outF.row(static_cast<Eigen::Index>(i)).transpose().cast<double>() - expect).norm() / L);
+    errF = std::max(
+        errF,
+        (outF.row(static_cast<Eigen::Index>(i)).transpose().cast<double>() - expect).norm() / L);
   }
   EXPECT_LT(errD, tolDouble);
   EXPECT_LT(errF, tolFloat);
@@ -229,11 +233,13 @@ TEST(Bind, DeformWorksOnStridedViews) {
   const Embedding e = bindMeanValue(pts, cube);
   Eigen::Matrix<float, Eigen::Dynamic, 3> big(20, 3);
   big.setConstant(1e6f);
-  for (int j = 0; j < 8; ++j) big.row(5 + j) = (cube.vertices[j] * 2.0 + Vec3(1, 2, 3)).cast<float>().transpose();
+  for (int j = 0; j < 8; ++j)
+    big.row(5 + j) = (cube.vertices[j] * 2.0 + Vec3(1, 2, 3)).cast<float>().transpose();
   PointsRowMajor out;
   e.deform(big.middleRows(5, 8), out);
   for (int i = 0; i < 2; ++i)
-    EXPECT_LT((out.row(i).transpose().cast<double>() - (pts[i] * 2.0 + Vec3(1, 2, 3))).norm(), 1e-5);
+    EXPECT_LT((out.row(i).transpose().cast<double>() - (pts[i] * 2.0 + Vec3(1, 2, 3))).norm(),
+              1e-5);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -304,7 +310,8 @@ TEST_F(CacheTest, ReuseRebindOnChangeAndCorruption) {
   EXPECT_NE(bindCacheKey(pts, other, o), bindCacheKey(pts, cage, o));
   const Embedding third = bindMeanValue(pts, other, o);
   EXPECT_FALSE(third.stats().fromCache);
-  EXPECT_GT((denseOf(third) - denseOf(first)).cwiseAbs().maxCoeff(), 1e-6);  // really different weights
+  EXPECT_GT((denseOf(third) - denseOf(first)).cwiseAbs().maxCoeff(),
+            1e-6);  // really different weights
   EXPECT_EQ(files().size(), 2u);
 
   // Different points or options: different keys.

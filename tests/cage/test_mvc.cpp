@@ -9,11 +9,11 @@
 #include <random>
 #include <vector>
 
+#include "sim/cage/mvc.h"
 #include "sim/mesh/closed_surface.h"
 #include "sim/mesh/mesh_io.h"
-#include "sim/cage/mvc.h"
-#include "tests/mesh/mesh_fixtures.h"
 #include "tests/draws.h"
+#include "tests/mesh/mesh_fixtures.h"
 
 namespace sb::cage {
 using namespace sb::mesh;  // meshes, mesh files, surfaces
@@ -36,7 +36,8 @@ Eval evalAt(const MeanValueCage& mc, const Vec3& x) {
 }
 
 // max(|Σw − 1|, |Σ w v − x| / L)
-std::pair<double, double> errors(const TriangleMesh& cage, const std::vector<double>& w, const Vec3& x) {
+std::pair<double, double> errors(const TriangleMesh& cage, const std::vector<double>& w,
+                                 const Vec3& x) {
   double sum = 0.0;
   Vec3 p = Vec3::Zero();
   for (std::size_t j = 0; j < w.size(); ++j) {
@@ -69,12 +70,15 @@ std::vector<double> jswReference(const TriangleMesh& cage, const Vec3& x) {
     U << u[t[0]], u[t[1]], u[t[2]];
     const double sign = U.determinant() < 0 ? -1.0 : 1.0;
     for (int i = 0; i < 3; ++i) {
-      c[i] = 2.0 * std::sin(h) * std::sin(h - theta[i]) / (std::sin(theta[(i + 1) % 3]) * std::sin(theta[(i + 2) % 3])) - 1.0;
+      c[i] = 2.0 * std::sin(h) * std::sin(h - theta[i]) /
+                 (std::sin(theta[(i + 1) % 3]) * std::sin(theta[(i + 2) % 3])) -
+             1.0;
       s[i] = sign * std::sqrt(std::max(0.0, 1.0 - c[i] * c[i]));
     }
     for (int i = 0; i < 3; ++i) {
       const int ip = (i + 1) % 3, im = (i + 2) % 3;
-      const double wi = (theta[i] - c[ip] * theta[im] - c[im] * theta[ip]) / (d[t[i]] * std::sin(theta[ip]) * s[im]);
+      const double wi = (theta[i] - c[ip] * theta[im] - c[im] * theta[ip]) /
+                        (d[t[i]] * std::sin(theta[ip]) * s[im]);
       w[t[i]] += wi;
       total += wi;
     }
@@ -99,7 +103,8 @@ std::vector<Named> generatedCages() {
 
 bool insideNamed(const std::string& name, const Vec3& p) {
   if (name == "cube") return (p.array() > 0).all() && (p.array() < 1).all();
-  if (name == "box3") return (p.array() > 0).all() && (p.array() < Eigen::Array3d(1.0, 0.7, 1.3)).all();
+  if (name == "box3")
+    return (p.array() > 0).all() && (p.array() < Eigen::Array3d(1.0, 0.7, 1.3)).all();
   if (name == "icosphere") return p.norm() < 0.9;  // the subdivided icosahedron contains r < 0.9
   if (name == "L") return testing::insideLShape(p);
   if (name == "star") return p.head<2>().norm() < 0.3 && p.z() > 0 && p.z() < 0.5;
@@ -111,7 +116,8 @@ bool insideNamed(const std::string& name, const Vec3& p) {
 }
 
 TEST(CageFixtures, GeneratedCagesAreValid) {
-  for (const auto& c : generatedCages()) EXPECT_NO_THROW(validateClosedSurface(c.cage, c.name)) << c.name;
+  for (const auto& c : generatedCages())
+    EXPECT_NO_THROW(validateClosedSurface(c.cage, c.name)) << c.name;
   EXPECT_EQ(testing::makeBox(6, 6, 20).vertices.size(), 554u);
   EXPECT_EQ(testing::makeBox(24, 24, 80).vertices.size(), 8834u);
 }
@@ -153,7 +159,9 @@ TEST(Mvc, MatchesIndependentJswFormulaAtGenericPoints) {
       const Vec3 x = centre + 0.8 * L * test::drawVector<Vec3>([&] { return U(rng); });
       bool clear = true;
       for (const auto& t : c.cage.triangles) {
-        const Vec3 n = (c.cage.vertices[t[1]] - c.cage.vertices[t[0]]).cross(c.cage.vertices[t[2]] - c.cage.vertices[t[0]]).normalized();
+        const Vec3 n = (c.cage.vertices[t[1]] - c.cage.vertices[t[0]])
+                           .cross(c.cage.vertices[t[2]] - c.cage.vertices[t[0]])
+                           .normalized();
         if (std::abs(n.dot(x - c.cage.vertices[t[0]])) < 0.005 * L) clear = false;
       }
       if (!clear) continue;
@@ -163,7 +171,8 @@ TEST(Mvc, MatchesIndependentJswFormulaAtGenericPoints) {
       double maxAbs = 0.0;
       for (double v : ref) maxAbs = std::max(maxAbs, std::abs(v));
       for (std::size_t j = 0; j < ref.size(); ++j)
-        ASSERT_NEAR(e.w[j], ref[j], 1e-9 * std::max(1.0, maxAbs)) << c.name << " vertex " << j << " at " << x.transpose();
+        ASSERT_NEAR(e.w[j], ref[j], 1e-9 * std::max(1.0, maxAbs))
+            << c.name << " vertex " << j << " at " << x.transpose();
     }
     EXPECT_GE(tested, 5) << c.name;
   }
@@ -194,8 +203,9 @@ TEST(Mvc, OnVerticesGiveKroneckerDelta) {
 }
 
 // Expect exactly the barycentric coordinates (a, b, c) on triangle t's vertices and 0 elsewhere.
-void expectBarycentric(const TriangleMesh& cage, const std::vector<double>& w, const std::array<int, 3>& t,
-                       const std::array<double, 3>& bary, double tol, const std::string& what) {
+void expectBarycentric(const TriangleMesh& cage, const std::vector<double>& w,
+                       const std::array<int, 3>& t, const std::array<double, 3>& bary, double tol,
+                       const std::string& what) {
   for (std::size_t k = 0; k < w.size(); ++k) {
     double expect = 0.0;
     for (int i = 0; i < 3; ++i)
@@ -233,7 +243,8 @@ TEST(Mvc, OnEdgesAndFacesGiveBarycentricCoordinates) {
 TEST(Mvc, CentreOfSplitBoxFaceIsOnTheDiagonal) {
   const TriangleMesh cube = testing::makeBox(1, 1, 1);
   const MeanValueCage mc(cube);
-  for (const Vec3& x : {Vec3(0.5, 0.5, 1.0), Vec3(0.5, 0.5, 0.0), Vec3(1.0, 0.5, 0.5), Vec3(0.5, 0.0, 0.5)}) {
+  for (const Vec3& x :
+       {Vec3(0.5, 0.5, 1.0), Vec3(0.5, 0.5, 0.0), Vec3(1.0, 0.5, 0.5), Vec3(0.5, 0.0, 0.5)}) {
     const Eval e = evalAt(mc, x);
     // Exactly two diagonal corners of that face get 1/2.
     int halves = 0;
@@ -252,7 +263,8 @@ TEST(Mvc, CentreOfSplitBoxFaceIsOnTheDiagonal) {
 // Points 1e-3 … 1e-9 (relative) off a face, inside and outside: no snapping, no blow-up; the
 // weights converge to the barycentric coordinates roughly linearly in the offset.
 TEST(Mvc, ContinuousNearFacesAndEdges) {
-  const std::vector<Named> cages = {{"cube", testing::makeBox(1, 1, 1)}, {"L", testing::makeLShape()},
+  const std::vector<Named> cages = {{"cube", testing::makeBox(1, 1, 1)},
+                                    {"L", testing::makeLShape()},
                                     {"icosphere", testing::makeIcosphere(1)}};
   for (const auto& c : cages) {
     const MeanValueCage mc(c.cage);
@@ -262,14 +274,17 @@ TEST(Mvc, ContinuousNearFacesAndEdges) {
       const Vec3 a = c.cage.vertices[t[0]], b = c.cage.vertices[t[1]], d = c.cage.vertices[t[2]];
       const Vec3 n = (b - a).cross(d - a).normalized();
       // the centroid, and a point on edge a-b (the diagonal of a split quad for the cube)
-      std::vector<std::pair<Vec3, std::array<double, 3>>> bases = {{(a + b + d) / 3.0, {1.0 / 3, 1.0 / 3, 1.0 / 3}}};
+      std::vector<std::pair<Vec3, std::array<double, 3>>> bases = {
+          {(a + b + d) / 3.0, {1.0 / 3, 1.0 / 3, 1.0 / 3}}};
       // Edge a-b, when the neighbouring triangle across it is coplanar (e.g. a split quad's
       // diagonal); at a crease the offset point would lie on the other face.
       for (const auto& o : c.cage.triangles) {
         int shared = 0;
         for (int k = 0; k < 3; ++k) shared += (o[k] == t[0] || o[k] == t[1]) ? 1 : 0;
         if (shared == 2 && o != t) {
-          const Vec3 no = (c.cage.vertices[o[1]] - c.cage.vertices[o[0]]).cross(c.cage.vertices[o[2]] - c.cage.vertices[o[0]]).normalized();
+          const Vec3 no = (c.cage.vertices[o[1]] - c.cage.vertices[o[0]])
+                              .cross(c.cage.vertices[o[2]] - c.cage.vertices[o[0]])
+                              .normalized();
           if (no.dot(n) > 1.0 - 1e-12) bases.push_back({0.5 * (a + b), {0.5, 0.5, 0.0}});
         }
       }
@@ -291,7 +306,8 @@ TEST(Mvc, ContinuousNearFacesAndEdges) {
               dev = std::max(dev, std::abs(e.w[k] - expect));
             }
             // Deviation O(offset · log): bounded, shrinking with the offset, never exactly 0.
-            EXPECT_LT(dev, 200.0 * rel) << c.name << " tri " << ti << " offset " << rel << " side " << side;
+            EXPECT_LT(dev, 200.0 * rel)
+                << c.name << " tri " << ti << " offset " << rel << " side " << side;
             EXPECT_GT(dev, 0.0) << "snapped onto the face at offset " << rel;
             EXPECT_LT(dev, prevDev * 0.5) << c.name << " not converging at " << rel;
             prevDev = dev;
@@ -329,7 +345,8 @@ TEST(Mvc, PointsInThePlaneOfNonAdjacentFaces) {
         for (double sgn : {1.0, -1.0}) {
           const Eval e1 = evalAt(mc, x + sgn * off * dir);
           double diff = 0.0;
-          for (std::size_t k = 0; k < e0.w.size(); ++k) diff = std::max(diff, std::abs(e1.w[k] - e0.w[k]));
+          for (std::size_t k = 0; k < e0.w.size(); ++k)
+            diff = std::max(diff, std::abs(e1.w[k] - e0.w[k]));
           EXPECT_LT(diff, 1e-9 + 100.0 * off) << x.transpose() << " offset " << off;
         }
       }
@@ -384,9 +401,10 @@ TEST(Mvc, FarAwayPointsAreFlaggedWithTheirAccuracy) {
 TEST(Mvc, ScaleInvariance) {
   const TriangleMesh base = testing::makeLShape();
   const MeanValueCage mc(base);
-  std::vector<Vec3> pts = {{0.3, 0.4, 0.5}, {1.5, 0.5, 0.5}, {0.5, 1.0, 0.5}, {1.0, 0.5, 0.9},
-                           {0.5, 0.5, 1.0}, {0.5, 0.5, 1.0 + 1e-9}, {0.5, 0.5, 1.0 - 1e-7}, {2.0, 1.0, 1.0},
-                           {3.0, -1.0, 2.0}, {0.25, 0.25, 0.0}, {1.0, 1.0, 0.5}};
+  std::vector<Vec3> pts = {{0.3, 0.4, 0.5},        {1.5, 0.5, 0.5}, {0.5, 1.0, 0.5},
+                           {1.0, 0.5, 0.9},        {0.5, 0.5, 1.0}, {0.5, 0.5, 1.0 + 1e-9},
+                           {0.5, 0.5, 1.0 - 1e-7}, {2.0, 1.0, 1.0}, {3.0, -1.0, 2.0},
+                           {0.25, 0.25, 0.0},      {1.0, 1.0, 0.5}};
   for (double scale : {1e-4, 1e4}) {
     TriangleMesh scaled = base;
     const Vec3 shift(0.25 * scale, -3.0 * scale, 1.5 * scale);
@@ -422,7 +440,8 @@ TEST(Mvc, NearDegenerateTrianglesGiveNoNaN) {
         if ((cage.vertices[i] - p).norm() == 0.0) return static_cast<int>(i);
       return -1;
     };
-    const int c00 = find({0, 0, 1}), c10 = find({1, 0, 1}), c11 = find({1, 1, 1}), c01 = find({0, 1, 1});
+    const int c00 = find({0, 0, 1}), c10 = find({1, 0, 1}), c11 = find({1, 1, 1}),
+              c01 = find({0, 1, 1});
     cage.vertices.emplace_back(0.5, eps, 1.0);
     const int m = static_cast<int>(cage.vertices.size()) - 1;
     tris.push_back({m, c00, c10});  // the sliver
@@ -432,9 +451,10 @@ TEST(Mvc, NearDegenerateTrianglesGiveNoNaN) {
     cage.triangles = tris;
     ASSERT_NO_THROW(validateClosedSurface(cage, "sliver"));
     const MeanValueCage mc(cage);
-    for (const Vec3& x : {Vec3(0.5, 0.5, 0.5), Vec3(0.5, 0.0, 0.5), Vec3(0.5, 0.0, 1.0), Vec3(0.5, 0.5 * eps, 1.0),
-                          Vec3(0.5, 0.5 * eps, 1.0 + 1e-9), Vec3(0.5, -1e-9, 1.0 - 1e-9), Vec3(0.3, 1e-3, 0.999),
-                          Vec3(2.0, 0.0, 1.0), Vec3(0.5, 2.0, 1.0)}) {
+    for (const Vec3& x :
+         {Vec3(0.5, 0.5, 0.5), Vec3(0.5, 0.0, 0.5), Vec3(0.5, 0.0, 1.0), Vec3(0.5, 0.5 * eps, 1.0),
+          Vec3(0.5, 0.5 * eps, 1.0 + 1e-9), Vec3(0.5, -1e-9, 1.0 - 1e-9), Vec3(0.3, 1e-3, 0.999),
+          Vec3(2.0, 0.0, 1.0), Vec3(0.5, 2.0, 1.0)}) {
       const Eval e = evalAt(mc, x);
       const auto [sumErr, linErr] = errors(cage, e.w, x);
       EXPECT_LT(sumErr, 1e-10) << eps << " " << x.transpose();
@@ -464,13 +484,18 @@ TEST(Mvc, NearCageFuzzStaysFiniteAndAccurate) {
         r1 = 1.0 - r1;
         r2 = 1.0 - r2;
       }
-      const Vec3 base = it % 3 == 0 ? a : it % 3 == 1 ? Vec3(a + r1 * (b - a)) : Vec3(a + r1 * (b - a) + r2 * (d - a));
+      const Vec3 base = it % 3 == 0   ? a
+                        : it % 3 == 1 ? Vec3(a + r1 * (b - a))
+                                      : Vec3(a + r1 * (b - a) + r2 * (d - a));
       const double dist = std::pow(10.0, -6.0 - static_cast<double>(rng() % 11)) * L;
       Vec3 dir = test::drawVector<Vec3>([&] { return N(rng); });
       const int mode = static_cast<int>(rng() % 3);
-      if (mode == 0) dir = n;
-      else if (mode == 1) dir = -n;
-      else dir -= dir.dot(n) * n;  // in the face plane
+      if (mode == 0)
+        dir = n;
+      else if (mode == 1)
+        dir = -n;
+      else
+        dir -= dir.dot(n) * n;  // in the face plane
       const Vec3 x = base + dist * dir.normalized();
       ASSERT_TRUE(mc.weights(x, w.data(), s)) << c.name << " " << x.transpose();
       const auto [sumErr, linErr] = errors(c.cage, w, x);
@@ -481,8 +506,9 @@ TEST(Mvc, NearCageFuzzStaysFiniteAndAccurate) {
 }
 
 TEST(Mvc, RealMeshesInsideTheirCages) {
-  for (const auto& [meshName, cageName] : {std::pair<std::string, std::string>{"bunny.obj", "bunny_cage.obj"},
-                                           {"suzanne.obj", "suzanne_cage.obj"}}) {
+  for (const auto& [meshName, cageName] :
+       {std::pair<std::string, std::string>{"bunny.obj", "bunny_cage.obj"},
+        {"suzanne.obj", "suzanne_cage.obj"}}) {
     const TriangleMesh mesh = readMesh(std::string(SOFTBODY_TEST_MESH_DIR) + "/" + meshName);
     const TriangleMesh cage = readMesh(std::string(SOFTBODY_TEST_MESH_DIR) + "/" + cageName);
     ASSERT_NO_THROW(validateClosedSurface(cage, cageName));

@@ -77,7 +77,8 @@ int main(int argc, char** argv) {
     sb::cage::BindOptions o;
     o.storage = storage;
     const sb::cage::Embedding e = sb::cage::bindMeanValue(points, cage, o);
-    const fs::path p = out / "bind_cache" / (storage == sb::cage::WeightStorage::Dense ? "dense.sbw" : "sparse.sbw");
+    const fs::path p = out / "bind_cache" /
+                       (storage == sb::cage::WeightStorage::Dense ? "dense.sbw" : "sparse.sbw");
     fs::create_directories(p.parent_path());
     e.save(p.string(), {1, 2});
     ++files;

@@ -70,8 +70,8 @@ inline std::string plyAscii(const TriangleMesh& m) {
 }
 
 inline std::string plyBinary(const TriangleMesh& m, bool big) {
-  std::string s = plyHeader(big ? "binary_big_endian" : "binary_little_endian",
-                            m.vertices.size(), m.triangles.size());
+  std::string s = plyHeader(big ? "binary_big_endian" : "binary_little_endian", m.vertices.size(),
+                            m.triangles.size());
   for (const auto& v : m.vertices)
     for (int a = 0; a < 3; ++a) put<float>(s, float(v[a]), big);
   for (const auto& t : m.triangles) {
@@ -98,7 +98,8 @@ inline std::string stlAscii(const std::vector<std::array<Vec3, 3>>& facets) {
 inline std::string stlAscii(const TriangleMesh& m) {
   std::vector<std::array<Vec3, 3>> facets;
   for (const auto& t : m.triangles)
-    facets.push_back({m.vertices[size_t(t[0])], m.vertices[size_t(t[1])], m.vertices[size_t(t[2])]});
+    facets.push_back(
+        {m.vertices[size_t(t[0])], m.vertices[size_t(t[1])], m.vertices[size_t(t[2])]});
   return stlAscii(facets);
 }
 

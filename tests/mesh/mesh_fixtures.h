@@ -17,7 +17,8 @@ using Vec3 = Eigen::Vector3d;
 
 // Surface of the box [0,sx]×[0,sy]×[0,sz] with a×b×c segments: 2(ab+bc+ca)+2 vertices,
 // each grid quad split along the diagonal (i,j)-(i+1,j+1). Outward oriented.
-inline TriangleMesh makeBox(int a, int b, int c, Vec3 size = Vec3(1, 1, 1), Vec3 origin = Vec3::Zero()) {
+inline TriangleMesh makeBox(int a, int b, int c, Vec3 size = Vec3(1, 1, 1),
+                            Vec3 origin = Vec3::Zero()) {
   TriangleMesh m;
   const int n[3] = {a, b, c};
   std::vector<int> index((a + 1) * (b + 1) * (c + 1), -1);
@@ -44,7 +45,8 @@ inline TriangleMesh makeBox(int a, int b, int c, Vec3 size = Vec3(1, 1, 1), Vec3
             coord[v] = corners[k][1];
             q[k] = id(coord[0], coord[1], coord[2]);
           }
-          // (u, v, axis) is right-handed: u×v = +axis. Side 1 faces +axis: counter-clockwise in (u, v).
+          // (u, v, axis) is right-handed: u×v = +axis. Side 1 faces +axis: counter-clockwise in (u,
+          // v).
           if (side == 1) {
             m.triangles.push_back({q[0], q[1], q[2]});
             m.triangles.push_back({q[0], q[2], q[3]});
@@ -59,10 +61,11 @@ inline TriangleMesh makeBox(int a, int b, int c, Vec3 size = Vec3(1, 1, 1), Vec3
   return m;
 }
 
-inline TriangleMesh makeIcosphere(int subdivisions, double radius = 1.0, Vec3 centre = Vec3::Zero()) {
+inline TriangleMesh makeIcosphere(int subdivisions, double radius = 1.0,
+                                  Vec3 centre = Vec3::Zero()) {
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  std::vector<Vec3> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                         {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  std::vector<Vec3> v = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                         {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
   std::vector<std::array<int, 3>> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
                                        {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
                                        {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
@@ -96,7 +99,8 @@ inline TriangleMesh makeIcosphere(int subdivisions, double radius = 1.0, Vec3 ce
 
 // A prism over a simple polygon (counter-clockwise in xy) that is star-shaped with respect to
 // `centre`, z in [0, height]; caps are fans around a centre vertex.
-inline TriangleMesh makePrism(const std::vector<Eigen::Vector2d>& poly, Eigen::Vector2d centre, double height) {
+inline TriangleMesh makePrism(const std::vector<Eigen::Vector2d>& poly, Eigen::Vector2d centre,
+                              double height) {
   TriangleMesh m;
   const int n = static_cast<int>(poly.size());
   for (int i = 0; i < n; ++i) m.vertices.emplace_back(poly[i].x(), poly[i].y(), 0.0);
@@ -141,14 +145,16 @@ inline TriangleMesh makeTorus(int n = 24, int k = 12, double R = 1.0, double r =
     const double a = 2 * M_PI * i / n;
     for (int j = 0; j < k; ++j) {
       const double b = 2 * M_PI * j / k;
-      m.vertices.emplace_back((R + r * std::cos(b)) * std::cos(a), (R + r * std::cos(b)) * std::sin(a), r * std::sin(b));
+      m.vertices.emplace_back((R + r * std::cos(b)) * std::cos(a),
+                              (R + r * std::cos(b)) * std::sin(a), r * std::sin(b));
     }
   }
   auto id = [&](int i, int j) { return (i % n) * k + (j % k); };
   for (int i = 0; i < n; ++i) {
     for (int j = 0; j < k; ++j) {
       const int p = id(i, j), q = id(i + 1, j), s = id(i + 1, j + 1), t = id(i, j + 1);
-      // d/da × d/db points outward for this parametrisation when traversed (i,j)->(i+1,j)->(i+1,j+1).
+      // d/da × d/db points outward for this parametrisation when traversed
+      // (i,j)->(i+1,j)->(i+1,j+1).
       m.triangles.push_back({p, q, s});
       m.triangles.push_back({p, s, t});
     }

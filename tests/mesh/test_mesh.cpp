@@ -38,7 +38,8 @@ void expectSameSurface(const TriangleMesh& a, const TriangleMesh& b, double tol)
     // same cyclic order (orientation preserved)
     bool same = false;
     for (int r = 0; r < 3; ++r)
-      same = same || (map[ta[0]] == tb[r] && map[ta[1]] == tb[(r + 1) % 3] && map[ta[2]] == tb[(r + 2) % 3]);
+      same = same || (map[ta[0]] == tb[r] && map[ta[1]] == tb[(r + 1) % 3] &&
+                      map[ta[2]] == tb[(r + 2) % 3]);
     EXPECT_TRUE(same) << "triangle " << t;
   }
 }
@@ -77,8 +78,8 @@ TEST_F(MeshIo, OffPlyStlReadTheSameCube) {
     std::ofstream f(path("c.ply"));
     f.precision(17);
     f << "ply\nformat ascii 1.0\nelement vertex " << cube.vertices.size()
-      << "\nproperty float x\nproperty float y\nproperty float z\nelement face " << cube.triangles.size()
-      << "\nproperty list uchar int vertex_indices\nend_header\n";
+      << "\nproperty float x\nproperty float y\nproperty float z\nelement face "
+      << cube.triangles.size() << "\nproperty list uchar int vertex_indices\nend_header\n";
     for (const auto& v : cube.vertices) f << v.x() << " " << v.y() << " " << v.z() << "\n";
     for (const auto& t : cube.triangles) f << "3 " << t[0] << " " << t[1] << " " << t[2] << "\n";
   }
@@ -88,10 +89,13 @@ TEST_F(MeshIo, OffPlyStlReadTheSameCube) {
     f.precision(17);
     f << "solid cube\n";
     for (const auto& t : cube.triangles) {
-      const Vec3 n = (cube.vertices[t[1]] - cube.vertices[t[0]]).cross(cube.vertices[t[2]] - cube.vertices[t[0]]).normalized();
+      const Vec3 n = (cube.vertices[t[1]] - cube.vertices[t[0]])
+                         .cross(cube.vertices[t[2]] - cube.vertices[t[0]])
+                         .normalized();
       f << " facet normal " << n.x() << " " << n.y() << " " << n.z() << "\n  outer loop\n";
       for (int k = 0; k < 3; ++k)
-        f << "   vertex " << cube.vertices[t[k]].x() << " " << cube.vertices[t[k]].y() << " " << cube.vertices[t[k]].z() << "\n";
+        f << "   vertex " << cube.vertices[t[k]].x() << " " << cube.vertices[t[k]].y() << " "
+          << cube.vertices[t[k]].z() << "\n";
       f << "  endloop\n endfacet\n";
     }
     f << "endsolid cube\n";
@@ -101,7 +105,8 @@ TEST_F(MeshIo, OffPlyStlReadTheSameCube) {
     const TriangleMesh r = readMesh(path(name));
     // The values are exactly representable in float, so every reader returns them exactly.
     expectSameSurface(cube, r, 0.0);
-    EXPECT_NO_THROW(validateClosedSurface(r, name));  // STL vertices were merged: the cube is closed
+    EXPECT_NO_THROW(
+        validateClosedSurface(r, name));  // STL vertices were merged: the cube is closed
   }
 }
 
@@ -181,7 +186,8 @@ TEST(CageValidation, NonManifoldEdge) {
   // Two tetrahedra sharing the edge 0-1.
   TriangleMesh c;
   c.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0, -1, 0}, {0, 0, -1}};
-  c.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}, {0, 1, 4}, {0, 4, 5}, {0, 5, 1}, {1, 5, 4}};
+  c.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3},
+                 {0, 1, 4}, {0, 4, 5}, {0, 5, 1}, {1, 5, 4}};
   const std::string e = validationError(c);
   EXPECT_NE(e.find("not 2-manifold"), std::string::npos) << e;
   EXPECT_NE(e.find("edge 0-1"), std::string::npos) << e;
@@ -192,7 +198,8 @@ TEST(CageValidation, NonManifoldVertex) {
   // fans is reported (as two components: the fans touch only at the vertex).
   TriangleMesh c;
   c.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {-1, 0, 0}, {0, -1, 0}, {0, 0, -1}};
-  c.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}, {0, 5, 4}, {0, 4, 6}, {0, 6, 5}, {4, 5, 6}};
+  c.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3},
+                 {0, 5, 4}, {0, 4, 6}, {0, 6, 5}, {4, 5, 6}};
   const std::string e = validationError(c);
   EXPECT_NE(e.find("components"), std::string::npos) << e;
 }
@@ -225,7 +232,8 @@ TEST(CageValidation, PinchedVertexJoiningTwoFans) {
   }
   // Make the cones agree with the tube's orientation whichever way the tube came out.
   if (validationError(c).find("inconsistent orientation") != std::string::npos)
-    for (std::size_t t = coneStart; t < c.triangles.size(); ++t) std::swap(c.triangles[t][1], c.triangles[t][2]);
+    for (std::size_t t = coneStart; t < c.triangles.size(); ++t)
+      std::swap(c.triangles[t][1], c.triangles[t][2]);
   const std::string e = validationError(c);
   EXPECT_NE(e.find("vertex " + std::to_string(P)), std::string::npos) << e;
   EXPECT_NE(e.find("separate fans"), std::string::npos) << e;
@@ -246,7 +254,9 @@ TEST(CageValidation, OneFlippedTriangleIsNamed) {
     TriangleMesh c = testing::makeBox(1, 1, 1);
     std::swap(c.triangles[flipped][1], c.triangles[flipped][2]);
     const std::string e = validationError(c);
-    EXPECT_NE(e.find("inconsistent orientation: triangle " + std::to_string(flipped) + " is flipped"), std::string::npos)
+    EXPECT_NE(
+        e.find("inconsistent orientation: triangle " + std::to_string(flipped) + " is flipped"),
+        std::string::npos)
         << e;
   }
 }
@@ -263,7 +273,8 @@ TEST(CageValidation, ZeroAreaTriangle) {
   TriangleMesh c = testing::makeBox(1, 1, 1);
   std::vector<std::array<int, 3>> tris;
   for (const auto& t : c.triangles) {
-    if (!(c.vertices[t[0]].z() == 1 && c.vertices[t[1]].z() == 1 && c.vertices[t[2]].z() == 1)) tris.push_back(t);
+    if (!(c.vertices[t[0]].z() == 1 && c.vertices[t[1]].z() == 1 && c.vertices[t[2]].z() == 1))
+      tris.push_back(t);
   }
   auto find = [&](const Vec3& p) {
     for (std::size_t i = 0; i < c.vertices.size(); ++i)

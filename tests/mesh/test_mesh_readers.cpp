@@ -34,10 +34,10 @@ std::string errorOf(const std::string& bytes, MeshFormat format) {
   return "";
 }
 
-#define EXPECT_ERROR(bytes, format, part)                                                    \
-  do {                                                                                       \
-    const std::string e_ = errorOf(bytes, format);                                           \
-    EXPECT_NE(e_.find(part), std::string::npos) << "message: '" << e_ << "'";                \
+#define EXPECT_ERROR(bytes, format, part)                                     \
+  do {                                                                        \
+    const std::string e_ = errorOf(bytes, format);                            \
+    EXPECT_NE(e_.find(part), std::string::npos) << "message: '" << e_ << "'"; \
   } while (0)
 
 const TriangleMesh& cube() {
@@ -79,8 +79,8 @@ TEST(MeshReaders, BinaryOffIsBigEndian) {
 }
 
 TEST(MeshReaders, PlyPropertyBeforeElementIsRefused) {
-  EXPECT_ERROR("ply\nformat ascii 1.0\nproperty float x\nelement vertex 1\nend_header\n1\n", MeshFormat::Ply,
-               "line 3: a property before any element");
+  EXPECT_ERROR("ply\nformat ascii 1.0\nproperty float x\nelement vertex 1\nend_header\n1\n",
+               MeshFormat::Ply, "line 3: a property before any element");
 }
 
 TEST(MeshReaders, HeaderCountsMustMatchTheBody) {
@@ -122,15 +122,17 @@ TEST(MeshReaders, HeaderCountsMustMatchTheBody) {
 
 TEST(MeshReaders, HugeDeclaredCountsFailFastWithoutAllocating) {
   const std::string offSmall = "OFF\n999999 1 0\n0 0 0\n";  // 21 bytes
-  const std::string plySmall = "ply\nformat ascii 1.0\nelement vertex 999999\nproperty float x\nproperty float y\n"
-                               "property float z\nend_header\n0 0 0\n";
+  const std::string plySmall =
+      "ply\nformat ascii 1.0\nelement vertex 999999\nproperty float x\nproperty float y\n"
+      "property float z\nend_header\n0 0 0\n";
   std::string boff = "OFF BINARY\n";
   put<std::int32_t>(boff, 999999, true);
   put<std::int32_t>(boff, 0, true);
   put<std::int32_t>(boff, 0, true);
-  std::string bply = "ply\nformat binary_little_endian 1.0\nelement vertex 2147483647\nproperty double x\n"
-                     "property double y\nproperty double z\nelement face 2147483647\n"
-                     "property list uint int vertex_indices\nend_header\n";
+  std::string bply =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 2147483647\nproperty double x\n"
+      "property double y\nproperty double z\nelement face 2147483647\n"
+      "property list uint int vertex_indices\nend_header\n";
   std::string stl(80, ' ');
   put<std::uint32_t>(stl, 0xffffffffu, false);
   const auto t0 = std::chrono::steady_clock::now();
@@ -139,16 +141,20 @@ TEST(MeshReaders, HugeDeclaredCountsFailFastWithoutAllocating) {
   EXPECT_ERROR(boff, MeshFormat::Off, "declares 999999 vertices");
   EXPECT_ERROR(bply, MeshFormat::Ply, "more than the");
   EXPECT_NE(errorOf(stl, MeshFormat::Stl), "");
-  EXPECT_NE(errorOf("ply\nformat ascii 1.0\nelement junk 2000000000\nend_header\n", MeshFormat::Ply), "");
+  EXPECT_NE(
+      errorOf("ply\nformat ascii 1.0\nelement junk 2000000000\nend_header\n", MeshFormat::Ply), "");
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 1.0);
 }
 
 TEST(MeshReaders, NonFiniteAndOutOfFloatRangeCoordinatesAreRefused) {
-  EXPECT_ERROR("OFF\n3 1 0\n0 0 0\nnan 0 0\n0 1 0\n3 0 1 2\n", MeshFormat::Off, "line 4: coordinate nan is not finite");
+  EXPECT_ERROR("OFF\n3 1 0\n0 0 0\nnan 0 0\n0 1 0\n3 0 1 2\n", MeshFormat::Off,
+               "line 4: coordinate nan is not finite");
   EXPECT_ERROR("v 0 0 0\nv inf 0 0\nv 0 1 0\nf 1 2 3\n", MeshFormat::Obj, "line 2: coordinate inf");
   // 1e39 passes a double parse but not float: refused in every format alike.
-  EXPECT_ERROR("v 0 0 0\nv 1e39 0 0\nv 0 1 0\nf 1 2 3\n", MeshFormat::Obj, "line 2: coordinate 1e+39 is beyond float range");
-  EXPECT_ERROR("OFF\n3 1 0\n0 0 0\n1e39 0 0\n0 1 0\n3 0 1 2\n", MeshFormat::Off, "beyond float range");
+  EXPECT_ERROR("v 0 0 0\nv 1e39 0 0\nv 0 1 0\nf 1 2 3\n", MeshFormat::Obj,
+               "line 2: coordinate 1e+39 is beyond float range");
+  EXPECT_ERROR("OFF\n3 1 0\n0 0 0\n1e39 0 0\n0 1 0\n3 0 1 2\n", MeshFormat::Off,
+               "beyond float range");
   std::string ply = plyAscii(cube());
   const size_t first = ply.find("end_header\n") + 11;
   ply.replace(first, ply.find(' ', first) - first, "nan");
@@ -183,9 +189,12 @@ TEST(MeshReaders, ObjMessagesNameTheFilesOwnIndex) {
 TEST(MeshReaders, TwoCornerFacesAreRefusedInEveryFormat) {
   EXPECT_ERROR("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\n", MeshFormat::Obj, "at least 3 vertices");
   EXPECT_ERROR("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n2 0 1\n", MeshFormat::Off, "at least 3 vertices");
-  EXPECT_ERROR(plyHeader("ascii", 3, 1) + "0 0 0\n1 0 0\n0 1 0\n2 0 1\n", MeshFormat::Ply, "at least 3 vertices");
-  EXPECT_ERROR("solid a\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nendloop\nendfacet\nendsolid a\n",
-               MeshFormat::Stl, "exactly 3 vertices");
+  EXPECT_ERROR(plyHeader("ascii", 3, 1) + "0 0 0\n1 0 0\n0 1 0\n2 0 1\n", MeshFormat::Ply,
+               "at least 3 vertices");
+  EXPECT_ERROR(
+      "solid a\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 "
+      "0\nendloop\nendfacet\nendsolid a\n",
+      MeshFormat::Stl, "exactly 3 vertices");
 }
 
 TEST(MeshReaders, ByteFlipsNeverCrash) {
@@ -193,8 +202,8 @@ TEST(MeshReaders, ByteFlipsNeverCrash) {
   // or is refused with a MeshError; nothing else (ASan/UBSan check the memory side).
   const std::pair<std::string, MeshFormat> files[] = {
       {plyBinary(cube(), false), MeshFormat::Ply}, {plyBinary(cube(), true), MeshFormat::Ply},
-      {plyAscii(cube()), MeshFormat::Ply},          {offBinary(cube()), MeshFormat::Off},
-      {offAscii(cube()), MeshFormat::Off},          {stlBinary(cube()), MeshFormat::Stl}};
+      {plyAscii(cube()), MeshFormat::Ply},         {offBinary(cube()), MeshFormat::Off},
+      {offAscii(cube()), MeshFormat::Off},         {stlBinary(cube()), MeshFormat::Stl}};
   int parsed = 0, refused = 0;
   for (const auto& [file, format] : files)
     for (size_t i = 0; i < file.size(); ++i)

@@ -5,13 +5,13 @@
 #include <cmath>
 #include <random>
 
-#include "sim/world/matching/cluster_batch.h"
 #include "sim/base/parallel.h"
+#include "sim/world/matching/cluster_batch.h"
 #include "sim/world/matching/rotation.h"
 #include "sim/world/matching/shape_matching.h"
 #include "test_util.h"
-#include "tet_bar.h"
 #include "tests/draws.h"
+#include "tet_bar.h"
 
 namespace sb {
 namespace {
@@ -352,8 +352,8 @@ TEST(ClusterBatch, BatchedBodyMovesAsOnTheGeneralPath) {
         batched.step();
         general.step();
         ASSERT_LT(maxDistance(batched, a, general, b), 1e-4) << modeName(mode) << " step " << step;
-        moved = std::max(
-            moved, (test::toDouble(batched.positions(a)) - bent).rowwise().norm().maxCoeff());
+        moved = std::max(moved,
+                         (test::toDouble(batched.positions(a)) - bent).rowwise().norm().maxCoeff());
       }
       EXPECT_GT(moved, 0.01);  // it did move
       EXPECT_TRUE(batched.takeEvents().empty());

@@ -9,21 +9,21 @@
 #include <random>
 
 #include "scene_checks.h"
-#include "sim/world/contact/body_contact.h"
-#include "sim/mesh/mesh_io.h"
-#include "sim/world/mass_properties.h"
 #include "sim/base/parallel.h"
 #include "sim/mesh/closed_surface.h"
+#include "sim/mesh/mesh_io.h"
+#include "sim/world/contact/body_contact.h"
 #include "sim/world/contact/surface_grid.h"
+#include "sim/world/mass_properties.h"
 #include "test_util.h"
 
 namespace sb {
 namespace {
 
-using test::pointTriangleDistance;
-using test::windingNumber;
 using mesh::Triangle;
 using mesh::TriangleFeature;
+using test::pointTriangleDistance;
+using test::windingNumber;
 
 const std::string kBunnyCage = std::string(SOFTBODY_ASSET_DIR) + "/meshes/bunny_cage.obj";
 
@@ -199,7 +199,7 @@ TEST(SurfaceGeometry, PseudoNormalSideAgreesWithWindingNumber) {
     }
     if (std::sqrt(best) < 1e-4f) continue;  // too close to the surface for float to decide
     const Vec3f side = mesh::pseudoNormal(s.triangles, topology, xf.col(0).data(), xf.col(1).data(),
-                                    xf.col(2).data(), bestT, bestQ.feature);
+                                          xf.col(2).data(), bestT, bestQ.feature);
     const bool pseudoInside = (pf - bestC).dot(side) < 0.0f;
     ASSERT_EQ(pseudoInside, std::abs(w) > 0.5) << "point " << p.transpose() << " w " << w;
     inside += pseudoInside;
@@ -251,7 +251,8 @@ TEST(MassProperties, ClosedForms) {
     z.push_back(float(c.z() + (k & 4 ? 1 : -1)));
     m.push_back(1.0f);
   }
-  const MassProperties cube = massProperties(PointColumns{{x.data(), y.data(), z.data()}}, m.data(), 8);
+  const MassProperties cube =
+      massProperties(PointColumns{{x.data(), y.data(), z.data()}}, m.data(), 8);
   EXPECT_DOUBLE_EQ(cube.mass, 8.0);
   EXPECT_LT((cube.centre - c).norm(), 1e-12);
   EXPECT_LT((cube.inertia - 16.0 * Mat3::Identity()).norm(), 1e-10);

@@ -32,7 +32,9 @@ json readJson(const std::string& path) {
   return json::parse(f);
 }
 
-Scene sceneFrom(const json& j) { return parseScene(j.dump(), "test.json", kScenes); }
+Scene sceneFrom(const json& j) {
+  return parseScene(j.dump(), "test.json", kScenes);
+}
 
 std::string sceneError(const std::string& text) {
   try {
@@ -45,7 +47,8 @@ std::string sceneError(const std::string& text) {
 
 bool allFinite(const Scene& s) {
   for (const SceneBody& b : s.bodies)
-    if (!s.world.positions(b.handle).allFinite() || !s.world.velocities(b.handle).allFinite()) return false;
+    if (!s.world.positions(b.handle).allFinite() || !s.world.velocities(b.handle).allFinite())
+      return false;
   return true;
 }
 
@@ -155,7 +158,8 @@ TEST(Hardening, ParticleIndicesAreNotTruncated) {
   e = sceneError(bunnyBody(R"(, "pinned": [18446744073709551615])"));
   EXPECT_NE(e.find("18446744073709551615"), std::string::npos) << e;
   EXPECT_EQ(e.find("-1"), std::string::npos) << e;
-  e = sceneError(bunnyBody(R"(, "clusters": {"kind": "explicit", "clusters": [[0, 1, 2, 4294967296]]})"));
+  e = sceneError(
+      bunnyBody(R"(, "clusters": {"kind": "explicit", "clusters": [[0, 1, 2, 4294967296]]})"));
   EXPECT_NE(e.find("particle index 4294967296 is out of range"), std::string::npos) << e;
   e = sceneError(bunnyBody(R"(, "pinned": [-4294967296])"));
   EXPECT_NE(e.find("-4294967296"), std::string::npos) << e;
@@ -181,12 +185,15 @@ TEST(Hardening, DuplicateKeysAreRefused) {
   EXPECT_EQ(e.rfind("test.json: line 2: bodies: duplicate key", 0), 0u) << e;
   e = sceneError(bunnyBody(",\n \"scale\": 1,\n \"scale\": 2"));
   EXPECT_EQ(e.rfind("test.json: line 3: bodies[0].scale: duplicate key", 0), 0u) << e;
-  e = sceneError("{\"world\": {\"gravity\": [0, -9.8, 0], \"substeps\": 2, \"substeps\": 3}, \"bodies\": []}");
+  e = sceneError(
+      "{\"world\": {\"gravity\": [0, -9.8, 0], \"substeps\": 2, \"substeps\": 3}, \"bodies\": []}");
   EXPECT_NE(e.find("world.substeps: duplicate key"), std::string::npos) << e;
   // The same key in different objects is fine.
-  EXPECT_EQ(sceneError(R"({"world": {"timeStep": 0.01}, "bodies": [{"name": "a", "mesh": "../meshes/bunny_cage.obj"},
+  EXPECT_EQ(
+      sceneError(
+          R"({"world": {"timeStep": 0.01}, "bodies": [{"name": "a", "mesh": "../meshes/bunny_cage.obj"},
                         {"name": "b", "mesh": "../meshes/bunny_cage.obj", "translation": [2, 0, 0]}]})"),
-            "");
+      "");
   // Other syntax errors keep their line.
   e = sceneError("{\"bodies\": [\n\n  1,, 2]}");
   EXPECT_EQ(e.rfind("test.json: line 3: bodies[0]: invalid JSON", 0), 0u) << e;  // after element 0
@@ -247,7 +254,8 @@ TEST(Hardening, LookupsOfFastParticlesVisitEachTriangleOnce) {
              Eigen::AlignedBox3f(Vec3f::Constant(-10), Vec3f::Constant(10)));
   for (float extra : {10.0f, 1e4f, 1e30f}) {
     long long entries = 0;
-    grid.forEachCell(Vec3f(0, 0, 0), extra, [&](const SurfaceGrid::Range& r) { entries += r.end - r.begin; });
+    grid.forEachCell(Vec3f(0, 0, 0), extra,
+                     [&](const SurfaceGrid::Range& r) { entries += r.end - r.begin; });
     EXPECT_EQ(entries, static_cast<long long>(cage.triangles.size())) << extra;
   }
   // A slow particle still asks a few cells only.
@@ -285,7 +293,8 @@ TEST(Hardening, LargeSceneWithAGiantBodyFinishesItsSteps) {
 
 TEST(Hardening, BodiesTooSmallForTheirPlaceAreRefused) {
   for (const char* scale : {"1e-9", "1e-6"}) {
-    const std::string e = sceneError(bunnyBody(std::string(R"(, "translation": [0, 1, 0], "scale": )") + scale));
+    const std::string e =
+        sceneError(bunnyBody(std::string(R"(, "translation": [0, 1, 0], "scale": )") + scale));
     EXPECT_NE(e.find("float32 positions cannot carry its shape"), std::string::npos) << e;
     EXPECT_NE(e.find("bodies[0]"), std::string::npos) << e;
   }
@@ -322,7 +331,8 @@ TEST_F(HardeningFiles, FramesRoundTrip) {
       const ConstPointsRef x = s.world.positions(s.bodies[b].handle);
       ASSERT_EQ(f.bodies[b].positions.rows(), x.rows());
       const double tol = format == FrameFormat::Binary ? 0.0 : 1e-6;  // OBJ: 9 significant digits
-      EXPECT_LE((f.bodies[b].positions - x).cwiseAbs().maxCoeff(), tol * (1 + x.cwiseAbs().maxCoeff()));
+      EXPECT_LE((f.bodies[b].positions - x).cwiseAbs().maxCoeff(),
+                tol * (1 + x.cwiseAbs().maxCoeff()));
       if (format == FrameFormat::Obj) {
         EXPECT_EQ(f.bodies[b].name, s.world.name(s.bodies[b].handle));
       }

@@ -76,8 +76,10 @@ Cantilever runCantilever(double cell, double alpha, double seconds) {
   for (int s = 1; s <= steps; ++s) {
     world.step();
     const bool still = fastest(world, b) < 1e-3 * 2.0;
-    if (!still) out.restTime = -1;
-    else if (out.restTime < 0) out.restTime = s / 60.0;
+    if (!still)
+      out.restTime = -1;
+    else if (out.restTime < 0)
+      out.restTime = s / 60.0;
   }
   const Eigen::MatrixX3d x = test::toDouble(world.positions(b));
   for (int i : tip) out.sag += def.positions[size_t(i)].y() - x(i, 1);
@@ -230,8 +232,9 @@ TEST(Material, ExtremePlasticityStaysBounded) {
   for (int s = 0; s < 600; ++s) world.step();
   const double size = extent(world, b);
   const Vec3 c = world.centreOfMass(b);
-  std::printf("[ material ] extreme plasticity: size %.3f m (from %.3f m), centre (%.3f, %.3f, %.3f)\n",
-              size, size0, c.x(), c.y(), c.z());
+  std::printf(
+      "[ material ] extreme plasticity: size %.3f m (from %.3f m), centre (%.3f, %.3f, %.3f)\n",
+      size, size0, c.x(), c.y(), c.z());
   EXPECT_LT(size, 4.0 * size0);
   EXPECT_LT(std::abs(c.y()), 1.0);
   EXPECT_LT(std::hypot(c.x(), c.z()), 1.0);

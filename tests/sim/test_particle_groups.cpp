@@ -127,8 +127,8 @@ TEST(ParticleGroups, ClusterMomentsFromGroupsEqualTheDirectSum) {
     groupRef[size_t(k)] =
         Eigen::Vector3f(b.x[0][size_t(first)], b.x[1][size_t(first)], b.x[2][size_t(first)]);
     groupMoments[size_t(k)] = accumulateMoments(
-        cols, g.particles.items.data(), g.particles.start[size_t(k)], g.particles.start[size_t(k) + 1],
-        groupRef[size_t(k)], g.restCentre[size_t(k)], false);
+        cols, g.particles.items.data(), g.particles.start[size_t(k)],
+        g.particles.start[size_t(k) + 1], groupRef[size_t(k)], g.restCentre[size_t(k)], false);
   }
   for (size_t c = 0; c < b.lists.size(); ++c) {
     // Reference point and rest centre of the cluster, as the World would have them.

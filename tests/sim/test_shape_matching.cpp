@@ -7,8 +7,8 @@
 #include "sim/world/matching/cluster_layout.h"
 #include "sim/world/matching/cluster_rest.h"
 #include "sim/world/matching/shape_matching.h"
-#include "tests/draws.h"
 #include "test_util.h"
+#include "tests/draws.h"
 
 namespace sb {
 namespace {
@@ -68,7 +68,8 @@ TEST(ShapeMatching, LinearWithBetaZeroEqualsRigid) {
     BodyDef linear = gridBody(Mode::Linear, clustered);
     linear.params.beta = 0.0;
     Eigen::MatrixX3d x = toMatrix(rigid.positions);
-    for (int i = 0; i < x.rows(); ++i) x.row(i) += test::drawVector<Eigen::RowVector3d>([&] { return u(rng); });
+    for (int i = 0; i < x.rows(); ++i)
+      x.row(i) += test::drawVector<Eigen::RowVector3d>([&] { return u(rng); });
     EXPECT_LT(relError(goalsFor(linear, x), goalsFor(rigid, x)), 1e-6) << clustered;
   }
 }

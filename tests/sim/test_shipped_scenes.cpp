@@ -15,8 +15,8 @@
 
 #include "scene_checks.h"
 #include "sim/cage/embedding.h"
-#include "sim/world/matching/plasticity.h"
 #include "sim/scene/scene.h"
+#include "sim/world/matching/plasticity.h"
 
 // CI also runs the suite under AddressSanitizer (SOFTBODY_SANITIZE adds -fsanitize=address, which
 // GCC announces with __SANITIZE_ADDRESS__ and Clang through __has_feature).
@@ -64,9 +64,9 @@ struct RunLength {
 
 RunLength runLengthOf(const std::string& name) {
   static const std::map<std::string, RunLength> special = {
-      {"default", {12.0, true}},    // (10.7 s)
-      {"plasticity", {7.0, true}},  // (5.0 s)
-      {"clusters", {10.0, true}},   // (7.7 s)
+      {"default", {12.0, true}},      // (10.7 s)
+      {"plasticity", {7.0, true}},    // (5.0 s)
+      {"clusters", {10.0, true}},     // (7.7 s)
       {"restitution", {10.0, true}},  // (8.3 s: the e = 0.9 box bounces until then)
       {"slope", {10.0, true}},        // (1.9 s: the 40° box has slid onto the floor)
       {"stack", {10.0, true}},        // (0.6 s)
@@ -186,8 +186,8 @@ INSTANTIATE_TEST_SUITE_P(Shipped, ShippedScene, ::testing::ValuesIn(shippedScene
 
 TEST(ShippedScenes, IncludeTheDocumentedScenes) {
   const std::vector<std::string> names = shippedSceneNames();
-  for (const char* expected : {"default", "plasticity", "clusters", "pile", "large", "stack",
-                               "restitution", "slope"})
+  for (const char* expected :
+       {"default", "plasticity", "clusters", "pile", "large", "stack", "restitution", "slope"})
     EXPECT_NE(std::find(names.begin(), names.end(), expected), names.end()) << expected;
 }
 
@@ -378,7 +378,6 @@ Vec3 velocityOf(const Scene& scene, int body) {
 double substepOf(const Scene& scene) {
   return scene.world.settings().timeStep / scene.world.settings().substeps;
 }
-
 
 // A stack of rigid boxes stands: over 20 s, sleep off, the top box of the stack drifts sideways
 // less than 1 % of its edge, and every box ends where it sits on the one below.
@@ -598,8 +597,8 @@ TEST(ShippedScenes, BoxOnASteepSlopeSlidesWithCoulombAcceleration) {
     const SlopeOf& sl = slopes[size_t(i)];
     // Still on its slope at t2, not on the floor.
     Vec3 normal;
-    const double onSlope = colliderDistance(scene.world.colliders()[size_t(sl.collider)],
-                                            centreOf(scene, i), &normal);
+    const double onSlope =
+        colliderDistance(scene.world.colliders()[size_t(sl.collider)], centreOf(scene, i), &normal);
     EXPECT_LT(onSlope, restEdge(scene, i)) << "body " << i << " left its slope";
     const double a = (v2[size_t(i)] - v1[size_t(i)]) / (t2 - t1);
     const double expected = g * (std::sin(sl.angle) - sl.friction * std::cos(sl.angle));

@@ -50,7 +50,8 @@ SoakResult soak(int steps, unsigned seed, int warmUp) {
     BodyDef d;
     d.name = w.name(b.handle);
     const ConstPointsRef rest = w.restPositions(b.handle);
-    for (int i = 0; i < rest.rows(); ++i) d.positions.push_back(rest.row(i).transpose().cast<double>());
+    for (int i = 0; i < rest.rows(); ++i)
+      d.positions.push_back(rest.row(i).transpose().cast<double>());
     d.surface = b.cageTriangles;
     d.params = w.params(b.handle);
     d.clusters = w.clusterDef(b.handle);
@@ -61,7 +62,9 @@ SoakResult soak(int steps, unsigned seed, int warmUp) {
   for (const SceneBody& b : scene.bodies) handles.push_back(b.handle);
   std::mt19937 rng(seed);
   auto pick = [&](int n) { return std::uniform_int_distribution<int>(0, n - 1)(rng); };
-  auto uniform = [&](double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); };
+  auto uniform = [&](double lo, double hi) {
+    return std::uniform_real_distribution<double>(lo, hi)(rng);
+  };
   std::vector<int> drags;
   SoakResult r;
   for (int s = 0; s < steps; ++s) {
@@ -112,14 +115,16 @@ SoakResult soak(int steps, unsigned seed, int warmUp) {
     }
     w.step();
     for (const WorldEvent& e : w.takeEvents())
-      if (e.message.find("NaN") != std::string::npos || e.message.find("not finite") != std::string::npos) {
+      if (e.message.find("NaN") != std::string::npos ||
+          e.message.find("not finite") != std::string::npos) {
         ++r.nanEvents;
         std::fprintf(stderr, "step %d: %s\n", s, e.message.c_str());
       }
     if (s == warmUp) r.rssWarm = residentBytes();
     if (s > warmUp && s % 100 == 0) r.rssMax = std::max(r.rssMax, residentBytes());
   }
-  for (BodyHandle h : w.bodies()) r.finite = r.finite && w.positions(h).allFinite() && w.velocities(h).allFinite();
+  for (BodyHandle h : w.bodies())
+    r.finite = r.finite && w.positions(h).allFinite() && w.velocities(h).allFinite();
   r.hash = w.stateHash();
   return r;
 }
@@ -131,8 +136,8 @@ TEST(Soak, LargeSceneTwentyThousandSteps) {
   // Flat: after warm-up (scratch lists grown, bodies removed and added back) at most 2% + 4 MB.
   EXPECT_LE(r.rssMax, r.rssWarm + r.rssWarm / 50 + (4 << 20))
       << "RSS " << r.rssWarm / 1e6 << " MB after warm-up, up to " << r.rssMax / 1e6 << " MB later";
-  std::printf("soak: RSS %.1f MB after warm-up, at most %.1f MB later; hash %016llx\n", r.rssWarm / 1e6,
-              r.rssMax / 1e6, static_cast<unsigned long long>(r.hash));
+  std::printf("soak: RSS %.1f MB after warm-up, at most %.1f MB later; hash %016llx\n",
+              r.rssWarm / 1e6, r.rssMax / 1e6, static_cast<unsigned long long>(r.hash));
 }
 
 TEST(Soak, HashReproducibleAcrossRunsAndThreadCounts) {

@@ -15,8 +15,8 @@
 #include <fstream>
 #include <string>
 
-#include <nlohmann/json.hpp>
 #include <stb_image.h>
+#include <nlohmann/json.hpp>
 
 using nlohmann::json;
 
@@ -56,10 +56,13 @@ struct Image {
   ~Image() { stbi_image_free(pixels); }
   Image(const Image&) = delete;
   Image& operator=(const Image&) = delete;
-  const unsigned char* at(int x, int y) const { return pixels + 3 * (static_cast<long>(y) * width + x); }
+  const unsigned char* at(int x, int y) const {
+    return pixels + 3 * (static_cast<long>(y) * width + x);
+  }
 };
 
-int visible(const std::string& shotPath, const std::string& emptyPath, const std::string& statsPath) {
+int visible(const std::string& shotPath, const std::string& emptyPath,
+            const std::string& statsPath) {
   const Image shot(shotPath), empty(emptyPath);
   const json stats = readJson(statsPath);
   if (shot.width != empty.width || shot.height != empty.height) {
@@ -83,15 +86,18 @@ int visible(const std::string& shotPath, const std::string& emptyPath, const std
       for (int x = x0; x <= x1; ++x) {
         const unsigned char* a = shot.at(x, y);
         const unsigned char* e = empty.at(x, y);
-        const int d = std::max({std::abs(a[0] - e[0]), std::abs(a[1] - e[1]), std::abs(a[2] - e[2])});
+        const int d =
+            std::max({std::abs(a[0] - e[0]), std::abs(a[1] - e[1]), std::abs(a[2] - e[2])});
         ++total;
         if (d > 24) ++differing;
       }
-    const double fraction = total ? static_cast<double>(differing) / static_cast<double>(total) : 0.0;
+    const double fraction =
+        total ? static_cast<double>(differing) / static_cast<double>(total) : 0.0;
     const bool ok = total >= 100 && fraction >= 0.25;
-    std::printf("body %zu (%s): bounds [%d,%d]-[%d,%d], %ld px, %.1f%% differ from the empty frame: %s\n",
-                b, bodies[b].value("name", "?").c_str(), x0, y0, x1, y1, total, 100.0 * fraction,
-                ok ? "visible" : "NOT VISIBLE");
+    std::printf(
+        "body %zu (%s): bounds [%d,%d]-[%d,%d], %ld px, %.1f%% differ from the empty frame: %s\n",
+        b, bodies[b].value("name", "?").c_str(), x0, y0, x1, y1, total, 100.0 * fraction,
+        ok ? "visible" : "NOT VISIBLE");
     if (!ok) ++failures;
   }
   return failures ? 1 : 0;
@@ -110,9 +116,10 @@ int moved(const std::string& refPath, const std::string& dragPath, int body, dou
     along += d * right.at(a).get<double>();
     distance2 += d * d;
   }
-  std::printf("body %d: centre moved %.4f m along the camera's right axis (%.4f m in total) "
-              "compared with the run without dragging; need >= %.4f\n",
-              body, along, std::sqrt(distance2), minMetres);
+  std::printf(
+      "body %d: centre moved %.4f m along the camera's right axis (%.4f m in total) "
+      "compared with the run without dragging; need >= %.4f\n",
+      body, along, std::sqrt(distance2), minMetres);
   return along >= minMetres ? 0 : 1;
 }
 
@@ -120,7 +127,8 @@ int still(const std::string& aPath, const std::string& bPath) {
   const json a = readJson(aPath), b = readJson(bPath);
   bool ok = true;
   if (!a.at("paused").get<bool>() || !b.at("paused").get<bool>()) {
-    std::printf("not paused (A: %s, B: %s)\n", a.at("paused").dump().c_str(), b.at("paused").dump().c_str());
+    std::printf("not paused (A: %s, B: %s)\n", a.at("paused").dump().c_str(),
+                b.at("paused").dump().c_str());
     ok = false;
   }
   if (b.at("frame").get<long>() <= a.at("frame").get<long>()) {
@@ -129,21 +137,22 @@ int still(const std::string& aPath, const std::string& bPath) {
     ok = false;
   }
   if (a.at("simTime").get<double>() != b.at("simTime").get<double>()) {
-    std::printf("simulated time advanced while paused: %.6f -> %.6f\n", a.at("simTime").get<double>(),
-                b.at("simTime").get<double>());
+    std::printf("simulated time advanced while paused: %.6f -> %.6f\n",
+                a.at("simTime").get<double>(), b.at("simTime").get<double>());
     ok = false;
   }
   const std::size_t n = a.at("bodies").size();
   for (std::size_t i = 0; i < n; ++i)
     for (int axis = 0; axis < 3; ++axis)
-      if (centreComponent(a, static_cast<int>(i), axis) != centreComponent(b, static_cast<int>(i), axis)) {
+      if (centreComponent(a, static_cast<int>(i), axis) !=
+          centreComponent(b, static_cast<int>(i), axis)) {
         std::printf("body %zu moved while paused\n", i);
         ok = false;
         break;
       }
   std::printf("frames %ld -> %ld, t = %.4f s -> %.4f s: %s\n", a.at("frame").get<long>(),
-              b.at("frame").get<long>(), a.at("simTime").get<double>(), b.at("simTime").get<double>(),
-              ok ? "still" : "NOT STILL");
+              b.at("frame").get<long>(), a.at("simTime").get<double>(),
+              b.at("simTime").get<double>(), ok ? "still" : "NOT STILL");
   return ok ? 0 : 1;
 }
 
@@ -181,7 +190,8 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (command == "visible" && argc == 5) return visible(argv[2], argv[3], argv[4]);
-    if (command == "moved" && argc == 6) return moved(argv[2], argv[3], std::stoi(argv[4]), std::stod(argv[5]));
+    if (command == "moved" && argc == 6)
+      return moved(argv[2], argv[3], std::stoi(argv[4]), std::stod(argv[5]));
     if (command == "still" && argc == 4) return still(argv[2], argv[3]);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "viewer_check: %s\n", e.what());

@@ -63,8 +63,8 @@ bool consider(const ContactGeometry& obstacle, const Vec3f& p, int t, Closest& b
 
 }  // namespace
 
-bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle, float h,
-                  bool deep, std::vector<Contact>& out) {
+bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle, float h, bool deep,
+                  std::vector<Contact>& out) {
   const std::vector<mesh::Triangle>& tris = *obstacle.triangles;
   const SurfaceGrid& grid = *obstacle.grid;
   bool foundDeep = false;
@@ -128,9 +128,8 @@ bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle,
       if (best.triangle < 0) continue;
       deepHit = true;
     }
-    const Vec3f side =
-        mesh::pseudoNormal(tris, *obstacle.topology, obstacle.x[0], obstacle.x[1], obstacle.x[2],
-                           best.triangle, best.point.feature);
+    const Vec3f side = mesh::pseudoNormal(tris, *obstacle.topology, obstacle.x[0], obstacle.x[1],
+                                          obstacle.x[2], best.triangle, best.point.feature);
     const Vec3f offset = p - best.position;
     const bool inside = offset.dot(side) < 0.0f;
     const float distance = std::sqrt(best.distanceSquared);
@@ -147,8 +146,8 @@ bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle,
       // The adjacent face that separates most.
       float bestPlane = kNoPlane;
       Vec3f bestNormal = Vec3f::Zero();
-      forEachNearbyFace(obstacle, best.triangle, feature >= vertexFeature ? feature - vertexFeature : -1,
-                        [&](int t) {
+      forEachNearbyFace(obstacle, best.triangle,
+                        feature >= vertexFeature ? feature - vertexFeature : -1, [&](int t) {
                           Vec3f n;
                           float d;
                           if (facePlane(obstacle, tris[size_t(t)], p, &n, &d) && d > bestPlane) {

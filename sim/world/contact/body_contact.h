@@ -30,7 +30,7 @@ struct ContactGeometry {
   const SurfaceGrid* grid = nullptr;
   float gridDrift = 0;
   Eigen::AlignedBox3f box;  // bounding box of the current positions (metres)
-  float gap = 0;     // metres ≥ 0: separation the solver keeps (particles stay off the surface)
+  float gap = 0;  // metres ≥ 0: separation the solver keeps (particles stay off the surface)
   // Contacts are also made for particles up to this far beyond the gap (metres, ≤ the grid's
   // reach): the solver lets them approach only until they touch (speculative contact), so a
   // resting particle keeps its contact and a fast one is stopped at the surface.
@@ -68,7 +68,7 @@ struct Contact {
 //
 // deep: also search the whole surface for particles inside the obstacle's box that have no
 // triangle in reach (overlapping starts, fast drags); returns whether it found any inside.
-bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle, float h,
-                  bool deep, std::vector<Contact>& out);
+bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle, float h, bool deep,
+                  std::vector<Contact>& out);
 
 }  // namespace sb

@@ -258,8 +258,7 @@ void solveConstraint(const Side& p, const Side& o, ContactPoint& c, bool blended
     applyImpulse(p, rp, dl * n, sp, h, false);
     applyImpulse(o, ro, -dl * n, so, h, false);
   }
-  if (!(c.friction > 0.0f) || !(c.inverseMass[j][1] > 0.0f && c.inverseMass[j][2] > 0.0f))
-    return;
+  if (!(c.friction > 0.0f) || !(c.inverseMass[j][1] > 0.0f && c.inverseMass[j][2] > 0.0f)) return;
   const Vec3f rel = measuredVelocity(p, rp, blended) - measuredVelocity(o, ro, blended);
   Vec3f& tangent = c.tangent[j];
   Vec3f next2 = tangent - (rel.dot(c.tangent1) / c.inverseMass[j][1]) * c.tangent1 -
@@ -302,9 +301,7 @@ void pushOut(std::vector<SolverBody>& bodies, const ContactPoint& c, float dista
   const Side p = probeSide(bodies, c), o = obstacleSide(bodies, c);
   const float spacing = p.body->spacing > 0.0f ? p.body->spacing : 0.05f;
   const bool deep = distance < -kDeepRecovery * spacing;
-  auto shareFor = [&](const Side& s) {
-    return deep ? s.body->recoveryShare : s.body->rigidShare;
-  };
+  auto shareFor = [&](const Side& s) { return deep ? s.body->recoveryShare : s.body->rigidShare; };
   const Vec3f rp = leverArm(p), ro = leverArm(o);
   auto kPos = [&](const Side& s, const Vec3f& r) {
     if (!s.body || s.body->fixed()) return 0.0f;

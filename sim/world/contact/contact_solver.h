@@ -93,9 +93,9 @@ struct ContactPoint {
   int collider = -1;              // static contacts
   Vec3f weights = Vec3f::Zero();  // on the triangle
   Vec3f normal = Vec3f::Zero();   // unit, out of the obstacle
-  float distance0 = 0;  // signed distance minus the gap, at detection (m; < 0: inside)
-  float friction = 0;     // μ
-  float restitution = 0;  // e in [0, 1]
+  float distance0 = 0;            // signed distance minus the gap, at detection (m; < 0: inside)
+  float friction = 0;             // μ
+  float restitution = 0;          // e in [0, 1]
   // Accumulated impulses (N·s) of constraints A [0] and B [1]: normal (≥ 0) and friction (a
   // vector in the tangent plane, within μ times the normal one). Set before the solve to warm
   // start it; read afterwards to warm start the next sub-step.

@@ -5,8 +5,8 @@
 
 namespace sb {
 
-void SurfaceGrid::build(const std::vector<mesh::Triangle>& triangles, const float* x, const float* y,
-                        const float* z, float reach, float cellSize,
+void SurfaceGrid::build(const std::vector<mesh::Triangle>& triangles, const float* x,
+                        const float* y, const float* z, float reach, float cellSize,
                         const Eigen::AlignedBox3f& region) {
   reach_ = reach;
   bounds_.setEmpty();
@@ -17,7 +17,7 @@ void SurfaceGrid::build(const std::vector<mesh::Triangle>& triangles, const floa
   bounds_ = bounds_.intersection(region);
   allTriangles_.clear();
   if (bounds_.isEmpty() || !bounds_.sizes().allFinite()) {  // no particle can ask: an empty grid
-    bounds_.setEmpty();  // contains and intersects nothing
+    bounds_.setEmpty();                                     // contains and intersects nothing
     dims_.setZero();
     cells_.start.assign(1, 0);
     cells_.items.clear();
@@ -39,8 +39,9 @@ void SurfaceGrid::build(const std::vector<mesh::Triangle>& triangles, const floa
     triangleBoxes_[t] = box;
     box.min().array() -= reach;
     box.max().array() += reach;
-    cellBoxes_[t] = box.intersects(bounds_) ? Eigen::AlignedBox3i(cellOf(box.min()), cellOf(box.max()))
-                                            : Eigen::AlignedBox3i();  // empty: entered nowhere
+    cellBoxes_[t] = box.intersects(bounds_)
+                        ? Eigen::AlignedBox3i(cellOf(box.min()), cellOf(box.max()))
+                        : Eigen::AlignedBox3i();  // empty: entered nowhere
     if (!cellBoxes_[t].isEmpty()) allTriangles_.push_back(int(t));
   }
   buildCsr(

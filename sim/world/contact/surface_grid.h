@@ -19,8 +19,8 @@ class SurfaceGrid {
   // `region` (only that part of space is gridded: where the particles that will ask are). Cells
   // are cubes of about `cellSize` metres (> 0), made larger when the grid would exceed
   // maxCellsPerAxis. Points are #P×3 columns x, y, z.
-  void build(const std::vector<mesh::Triangle>& triangles, const float* x, const float* y, const float* z,
-             float reach, float cellSize, const Eigen::AlignedBox3f& region);
+  void build(const std::vector<mesh::Triangle>& triangles, const float* x, const float* y,
+             const float* z, float reach, float cellSize, const Eigen::AlignedBox3f& region);
 
   // The bounding box of all triangles grown by the reach, clipped to the region: outside it no
   // triangle is in reach (or the point is outside the region).
@@ -61,7 +61,7 @@ class SurfaceGrid {
   Vec3f origin_ = Vec3f::Zero();
   float invCell_ = 1.0f;
   Eigen::Vector3i dims_ = Eigen::Vector3i::Zero();
-  Csr cells_;  // the triangles entered in each cell, ascending
+  Csr cells_;                      // the triangles entered in each cell, ascending
   std::vector<int> allTriangles_;  // every triangle entered in some cell, ascending
   std::vector<Eigen::AlignedBox3f> triangleBoxes_;  // per triangle, not grown
   // Scratch kept between builds so a rebuild does not allocate: each triangle's cell range.

@@ -20,9 +20,9 @@
 #include <vector>
 
 #include "sim/base/csr.h"
+#include "sim/base/types.h"
 #include "sim/world/body_def.h"
 #include "sim/world/matching/cluster_rest.h"
-#include "sim/base/types.h"
 
 namespace sb {
 

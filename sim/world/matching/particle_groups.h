@@ -14,9 +14,9 @@
 
 #include <Eigen/Core>
 
-#include "sim/world/matching/shape_matching.h"
 #include "sim/base/csr.h"
 #include "sim/base/types.h"
+#include "sim/world/matching/shape_matching.h"
 
 namespace sb {
 

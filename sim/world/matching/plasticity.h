@@ -1,8 +1,8 @@
 // Plastic flow of a cluster's rest shape (docs/design.md §5.2, Müller et al. 2005 §4.4).
 #pragma once
 
-#include "sim/world/body_def.h"
 #include "sim/base/types.h"
+#include "sim/world/body_def.h"
 
 namespace sb {
 

@@ -1,3 +1,3 @@
 // Fixture for tests/layout: the physics including the scene layer and JSON (both wrong).
-#include "sim/scene/scene.h"
 #include <nlohmann/json.hpp>
+#include "sim/scene/scene.h"
