@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "sim/base/parallel_for.h"
+#include "sim/base/union_find.h"
 
 namespace sb {
 
@@ -69,14 +70,6 @@ void prepareBody(BodySlot& b, SolverBody& sb) {
   sb.recoveryShare = m.pinned.empty() ? 1.0f : 0.0f;
   sb.immovable = b.sleep.asleep;
   prepareSolverBody(sb);
-}
-
-int findRoot(std::vector<int>& parent, int i) {
-  while (parent[size_t(i)] != i) {
-    parent[size_t(i)] = parent[size_t(parent[size_t(i)])];
-    i = parent[size_t(i)];
-  }
-  return i;
 }
 
 }  // namespace

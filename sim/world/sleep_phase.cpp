@@ -1,18 +1,8 @@
 #include "sim/world/sleep_phase.h"
 
+#include "sim/base/union_find.h"
+
 namespace sb {
-
-namespace {
-
-int findRoot(std::vector<int>& parent, int i) {
-  while (parent[size_t(i)] != i) {
-    parent[size_t(i)] = parent[size_t(parent[size_t(i)])];
-    i = parent[size_t(i)];
-  }
-  return i;
-}
-
-}  // namespace
 
 bool runSleepPhase(double h, bool enabled, std::vector<BodySlot>& slots,
                    const std::vector<int>& awake, const std::vector<std::pair<int, int>>& touching,
