@@ -2,8 +2,12 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
+#include <climits>
+#include <vector>
 
 #include "sim/base/linalg.h"
+#include "sim/base/parallel_for.h"
 
 namespace sb {
 
@@ -22,66 +26,98 @@ MassProperties massProperties(const PointColumns& x, const float* mass, int coun
   return mp;
 }
 
-RigidMotion rigidMotion(const PointColumns& x, const PointColumns& v, const float* w, int count) {
+namespace {
+
+// Σw, Σw·d (3), Σw·v (3), Σw·d dᵀ (xx, yy, zz, xy, yz, zx), Σw·d × v (3), d = x − origin.
+using RigidSums = std::array<double, 16>;
+
+// The sums over points [b0, b1), at most one block: float sums in eight lanes, added in double.
+RigidSums rigidBlockSums(const PointColumns& x, const PointColumns& v, const float* w,
+                         const float origin[3], int b0, int b1) {
   const float *px = x.c[0], *py = x.c[1], *pz = x.c[2];
   const float *vx = v.c[0], *vy = v.c[1], *vz = v.c[2];
-  const float ox = px[0], oy = py[0], oz = pz[0];
-  constexpr int kLanes = 8, kBlock = 512;
-  // Σw, Σw·d, Σw·v, Σw·d dᵀ (6), Σw·d × v with d = x − x₀.
-  double W = 0, D[3] = {0, 0, 0}, V[3] = {0, 0, 0}, C[6] = {0, 0, 0, 0, 0, 0}, X[3] = {0, 0, 0};
-  for (int b0 = 0; b0 < count; b0 += kBlock) {
-    const int b1 = std::min(count, b0 + kBlock);
-    float acc[16][kLanes] = {};
-    auto add = [&](int i, int l) {
-      const float wi = w[i];
-      const float dx = px[i] - ox, dy = py[i] - oy, dz = pz[i] - oz;
-      const float ux = vx[i], uy = vy[i], uz = vz[i];
-      acc[0][l] += wi;
-      acc[1][l] += wi * dx;
-      acc[2][l] += wi * dy;
-      acc[3][l] += wi * dz;
-      acc[4][l] += wi * ux;
-      acc[5][l] += wi * uy;
-      acc[6][l] += wi * uz;
-      acc[7][l] += wi * dx * dx;
-      acc[8][l] += wi * dy * dy;
-      acc[9][l] += wi * dz * dz;
-      acc[10][l] += wi * dx * dy;
-      acc[11][l] += wi * dy * dz;
-      acc[12][l] += wi * dz * dx;
-      acc[13][l] += wi * (dy * uz - dz * uy);
-      acc[14][l] += wi * (dz * ux - dx * uz);
-      acc[15][l] += wi * (dx * uy - dy * ux);
-    };
-    int i = b0;
-    for (; i + kLanes <= b1; i += kLanes)
-      for (int l = 0; l < kLanes; ++l) add(i + l, l);
-    for (; i < b1; ++i) add(i, 0);
-    double t[16];
-    for (int k = 0; k < 16; ++k) {
-      t[k] = 0;
-      for (int l = 0; l < kLanes; ++l) t[k] += double(acc[k][l]);
-    }
-    W += t[0];
-    for (int a = 0; a < 3; ++a) {
-      D[a] += t[1 + a];
-      V[a] += t[4 + a];
-      X[a] += t[13 + a];
-    }
-    for (int a = 0; a < 6; ++a) C[a] += t[7 + a];
+  const float ox = origin[0], oy = origin[1], oz = origin[2];
+  constexpr int kLanes = 8;
+  float acc[16][kLanes] = {};
+  auto add = [&](int i, int l) {
+    const float wi = w[i];
+    const float dx = px[i] - ox, dy = py[i] - oy, dz = pz[i] - oz;
+    const float ux = vx[i], uy = vy[i], uz = vz[i];
+    acc[0][l] += wi;
+    acc[1][l] += wi * dx;
+    acc[2][l] += wi * dy;
+    acc[3][l] += wi * dz;
+    acc[4][l] += wi * ux;
+    acc[5][l] += wi * uy;
+    acc[6][l] += wi * uz;
+    acc[7][l] += wi * dx * dx;
+    acc[8][l] += wi * dy * dy;
+    acc[9][l] += wi * dz * dz;
+    acc[10][l] += wi * dx * dy;
+    acc[11][l] += wi * dy * dz;
+    acc[12][l] += wi * dz * dx;
+    acc[13][l] += wi * (dy * uz - dz * uy);
+    acc[14][l] += wi * (dz * ux - dx * uz);
+    acc[15][l] += wi * (dx * uy - dy * ux);
+  };
+  int i = b0;
+  for (; i + kLanes <= b1; i += kLanes)
+    for (int l = 0; l < kLanes; ++l) add(i + l, l);
+  for (; i < b1; ++i) add(i, 0);
+  RigidSums t;
+  for (int k = 0; k < 16; ++k) {
+    t[size_t(k)] = 0;
+    for (int l = 0; l < kLanes; ++l) t[size_t(k)] += double(acc[k][l]);
   }
+  return t;
+}
+
+void addSums(RigidSums& total, const RigidSums& block) {
+  for (size_t k = 0; k < total.size(); ++k) total[k] += block[k];
+}
+
+// The motion from the sums over all points.
+RigidMotion rigidMotionFromSums(const RigidSums& s, const float origin[3]) {
+  const double W = s[0];
   RigidMotion r;
-  const Vec3 dc = Vec3(D[0], D[1], D[2]) / W;
-  r.centre = Vec3(ox, oy, oz) + dc;
-  r.velocity = Vec3(V[0], V[1], V[2]) / W;
+  const Vec3 dc = Vec3(s[1], s[2], s[3]) / W;
+  r.centre = Vec3(origin[0], origin[1], origin[2]) + dc;
+  r.velocity = Vec3(s[4], s[5], s[6]) / W;
   Mat3 spread;  // Σ w r rᵀ about the centre
-  spread << C[0], C[3], C[5], C[3], C[1], C[4], C[5], C[4], C[2];
+  spread << s[7], s[10], s[12], s[10], s[8], s[11], s[12], s[11], s[9];
   spread -= W * dc * dc.transpose();
   const Mat3 inertia = spread.trace() * Mat3::Identity() - spread;
-  r.angularMomentum = Vec3(X[0], X[1], X[2]) - W * dc.cross(r.velocity);
+  r.angularMomentum = Vec3(s[13], s[14], s[15]) - W * dc.cross(r.velocity);
   r.inverseInertia = symmetricPseudoInverse<3>(inertia, 1e-9);
   r.omega = r.inverseInertia * r.angularMomentum;
   return r;
+}
+
+// Below this many points rigidMotionOnThreads sums on the calling thread.
+constexpr int kMinParallelRigidMotion = 32768;
+
+}  // namespace
+
+RigidMotion rigidMotion(const PointColumns& x, const PointColumns& v, const float* w, int count) {
+  const float origin[3] = {x.c[0][0], x.c[1][0], x.c[2][0]};
+  RigidSums total{};
+  for (int b0 = 0; b0 < count; b0 += kRigidMotionBlock)
+    addSums(total, rigidBlockSums(x, v, w, origin, b0, std::min(count, b0 + kRigidMotionBlock)));
+  return rigidMotionFromSums(total, origin);
+}
+
+RigidMotion rigidMotionOnThreads(const PointColumns& x, const PointColumns& v, const float* w,
+                                 int count) {
+  const float origin[3] = {x.c[0][0], x.c[1][0], x.c[2][0]};
+  const int blocks = (count + kRigidMotionBlock - 1) / kRigidMotionBlock;
+  std::vector<RigidSums> sums(static_cast<size_t>(blocks));
+  parallelFor(blocks, count >= kMinParallelRigidMotion ? 2 : INT32_MAX, [&](int b) {
+    sums[size_t(b)] = rigidBlockSums(x, v, w, origin, b * kRigidMotionBlock,
+                                     std::min(count, (b + 1) * kRigidMotionBlock));
+  });
+  RigidSums total{};
+  for (const RigidSums& block : sums) addSums(total, block);  // block order: the same bits
+  return rigidMotionFromSums(total, origin);
 }
 
 Vec3 centreOfMass(const PointColumns& x, const float* mass, int count) {

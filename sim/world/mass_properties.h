@@ -35,10 +35,16 @@ struct RigidMotion {
   Vec3 angularMomentum = Vec3::Zero();  // L about xc, kg·m²/s (weights as masses)
   Mat3 inverseInertia = Mat3::Zero();   // about xc, 1/(kg·m²)
 };
-// One pass over the points: float sums in eight lanes per block of 512 points, relative to the
-// first point (no cancellation far from the origin), blocks added in double.
+// One pass over the points: float sums in eight lanes per block of kRigidMotionBlock points,
+// relative to the first point (no cancellation far from the origin), blocks added in double.
 RigidMotion rigidMotion(const PointColumns& x, const PointColumns& v, const float* weight,
                         int count);
+// The same motion with the blocks summed on the pool's threads (sim/base/parallel.h) when the
+// set is large; the blocks' sums are added in block order, so the result has the same bits as
+// rigidMotion for any thread count.
+RigidMotion rigidMotionOnThreads(const PointColumns& x, const PointColumns& v, const float* weight,
+                                 int count);
+inline constexpr int kRigidMotionBlock = 512;
 
 // Σ mᵢ xᵢ / Σ mᵢ (m).
 Vec3 centreOfMass(const PointColumns& x, const float* mass, int count);
