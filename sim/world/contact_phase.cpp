@@ -83,29 +83,35 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
   scratch.wake.clear();
   ++scratch.substeps;
   const int minParallel = layout.particles >= kMinParallelBodyWork ? 2 : INT32_MAX;
-  // Bounds and speeds of every body (serial: a light pass, not worth a fork/join).
   for (int s : order) {
-    const BodyState& st = slots[size_t(s)].state;
     ContactScratch::Body& cs = contactScratch[size_t(s)];
-    const BodyModel& m = *slots[size_t(s)].model;
-    cs.box.setEmpty();
-    Eigen::Vector3f momentum = Eigen::Vector3f::Zero();
-    for (int i = 0; i < st.x.rows(); ++i) {
-      cs.box.extend(st.x.row(i).transpose());
-      momentum += m.mass[i] * st.v.row(i).transpose();
-    }
-    cs.meanVelocity = momentum / float(m.totalMass);
-    float speed2 = 0, relative2 = 0;
-    for (int i = 0; i < st.x.rows(); ++i) {
-      speed2 = std::max(speed2, st.v.row(i).squaredNorm());
-      relative2 = std::max(relative2, (st.v.row(i).transpose() - cs.meanVelocity).squaredNorm());
-    }
-    cs.maxSpeed = std::sqrt(speed2);
-    cs.maxRelativeSpeed = std::sqrt(relative2);
     cs.obstacle = false;
     cs.involved = false;
     cs.staticHits.clear();
   }
+  const bool bodyPairs = settings.bodyContact && order.size() >= 2;
+  // Bounds and speeds of every body: what the body–body broad and narrow phases need.
+  if (bodyPairs)
+    parallelFor(static_cast<int>(order.size()), minParallel, [&](int k) {
+      const int s = order[size_t(k)];
+      const BodyState& st = slots[size_t(s)].state;
+      ContactScratch::Body& cs = contactScratch[size_t(s)];
+      const BodyModel& m = *slots[size_t(s)].model;
+      cs.box.setEmpty();
+      Eigen::Vector3f momentum = Eigen::Vector3f::Zero();
+      for (int i = 0; i < st.x.rows(); ++i) {
+        cs.box.extend(st.x.row(i).transpose());
+        momentum += m.mass[i] * st.v.row(i).transpose();
+      }
+      cs.meanVelocity = momentum / float(m.totalMass);
+      float speed2 = 0, relative2 = 0;
+      for (int i = 0; i < st.x.rows(); ++i) {
+        speed2 = std::max(speed2, st.v.row(i).squaredNorm());
+        relative2 = std::max(relative2, (st.v.row(i).transpose() - cs.meanVelocity).squaredNorm());
+      }
+      cs.maxSpeed = std::sqrt(speed2);
+      cs.maxRelativeSpeed = std::sqrt(relative2);
+    });
 
   // Static colliders: every particle of an awake body within the margin plus its sub-step's
   // travel of one (per body, in parallel).
@@ -127,7 +133,7 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
       }
     });
   }
-  if (!settings.bodyContact || order.size() < 2) return;
+  if (!bodyPairs) return;
 
   // A particle moves at most h·maxSpeed in this sub-step, and so does the surface it meets.
   // Boxes grow by the grid's base reach (the margin) plus twice that travel, so no pair that

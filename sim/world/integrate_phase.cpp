@@ -1,7 +1,11 @@
 #include "sim/world/integrate_phase.h"
 
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
+#include <climits>
 #include <cmath>
+#include <vector>
 
 #include "sim/base/parallel_for.h"
 #include "sim/world/mass_properties.h"
@@ -17,6 +21,8 @@ constexpr long long kMinParallelIntegration = 8192;
 // Per-body passes (predict, whole-body level, velocities, damping) fork only in worlds with at
 // least this many particles.
 constexpr long long kMinParallelBodyWork = 2048;
+// A single body's per-particle passes split over threads from this many particles on.
+constexpr int kMinParallelParticles = 32768;
 // A body's turn per sub-step below which the prediction moves along the tangent (the rotation's
 // second-order term, (hω)²/2 of the radius, is below float resolution of the positions there).
 constexpr double kMinTurn = 1e-3;
@@ -103,10 +109,25 @@ PointColumns columnsOf(const MatX3f& m) {
   return PointColumns{{m.col(0).data(), m.col(1).data(), m.col(2).data()}};
 }
 
+// Writable column pointers of a #P×3 array (x, y, z), for the per-particle loops: plain float
+// arrays the compiler vectorises across particles.
+std::array<float*, 3> writableColumns(MatX3f& m) {
+  return {m.col(0).data(), m.col(1).data(), m.col(2).data()};
+}
+
 Eigen::Matrix3f skew(const Eigen::Vector3f& w) {
   Eigen::Matrix3f K;
   K << 0, -w.z(), w.y(), w.z(), 0, -w.x(), -w.y(), w.x(), 0;
   return K;
+}
+
+// Calls body(begin, end) over pieces of [0, count) of one body's per-particle arrays: on the
+// pool's threads for a large body (when called from a loop over bodies that already runs in
+// parallel, on the calling thread). Every particle is computed alone, so the bits do not depend
+// on the split.
+template <typename Body>
+void forParticleRanges(int count, const Body& body) {
+  parallelRanges(count, kMinParallelParticles, 1 << 30, body);
 }
 
 // The weights a body's rigid motion is fitted with: masses, pinned particles immovable.
@@ -120,40 +141,48 @@ void runPredictPhase(const WorkLayout& layout, const Vec3& gravity, double h,
                      std::vector<BodySlot>& slots, const std::vector<int>& order) {
   const float hf = float(h);
   const Eigen::Vector3f fall = (h * h * gravity).cast<float>();
-  parallelFor(static_cast<int>(order.size()),
-              layout.particles >= kMinParallelBodyWork ? 2 : INT32_MAX, [&](int k) {
-                BodySlot& b = slots[size_t(order[size_t(k)])];
-                const BodyModel& m = *b.model;
-                BodyState& s = b.state;
-                const int n = m.particleCount();
-                // A pinned body has no free turn to advance and no spin to keep.
-                RigidMotion rm;
-                if (m.pinned.empty())
-                  rm = rigidMotion(columnsOf(s.x), columnsOf(s.v), m.mass.data(), n);
-                s.spin = rm.angularMomentum;
-                const double turn = h * rm.omega.norm();
-                // x̂ = x + h·v + h²·g, with the tangential h·ω × r of the body's turn replaced by
-                // the rotation (R − I)·r, r = x − xc; v̂ = v + (R − I)(v − vc): the velocities turn
-                // with the body.
-                Eigen::Matrix3f toRotation = Eigen::Matrix3f::Zero();    // R − I − h·[ω]×
-                Eigen::Matrix3f turnVelocity = Eigen::Matrix3f::Zero();  // R − I
-                if (turn > kMinTurn) {
-                  const Mat3 RmI =
-                      Eigen::AngleAxisd(turn, rm.omega / rm.omega.norm()).toRotationMatrix() -
-                      Mat3::Identity();
-                  turnVelocity = RmI.cast<float>();
-                  toRotation = turnVelocity - hf * skew(rm.omega.cast<float>());
-                }
-                const Eigen::Vector3f xc = rm.centre.cast<float>(), vc = rm.velocity.cast<float>();
-                s.vPred.resize(n, 3);
-                for (int i = 0; i < n; ++i) {
-                  const Eigen::Vector3f x = s.x.row(i).transpose(), v = s.v.row(i).transpose();
-                  s.x.row(i) = (x + hf * v + toRotation * (x - xc) + fall).transpose();
-                  s.vPred.row(i) = (v + turnVelocity * (v - vc)).transpose();
-                }
-                for (int p : m.pinned) s.x.row(p) = m.startPositions.row(p);
-                s.xPred = s.x;
-              });
+  parallelFor(
+      static_cast<int>(order.size()), layout.particles >= kMinParallelBodyWork ? 2 : INT32_MAX,
+      [&](int k) {
+        BodySlot& b = slots[size_t(order[size_t(k)])];
+        const BodyModel& m = *b.model;
+        BodyState& s = b.state;
+        const int n = m.particleCount();
+        // A pinned body has no free turn to advance and no spin to keep.
+        RigidMotion rm;
+        if (m.pinned.empty())
+          rm = rigidMotionOnThreads(columnsOf(s.x), columnsOf(s.v), m.mass.data(), n);
+        s.spin = rm.angularMomentum;
+        const double turn = h * rm.omega.norm();
+        // x̂ = x + h·v + h²·g, with the tangential h·ω × r of the body's turn replaced by
+        // the rotation (R − I)·r, r = x − xc; v̂ = v + (R − I)(v − vc): the velocities turn
+        // with the body.
+        Eigen::Matrix3f toRotation = Eigen::Matrix3f::Zero();    // R − I − h·[ω]×
+        Eigen::Matrix3f turnVelocity = Eigen::Matrix3f::Zero();  // R − I
+        if (turn > kMinTurn) {
+          const Mat3 RmI = Eigen::AngleAxisd(turn, rm.omega / rm.omega.norm()).toRotationMatrix() -
+                           Mat3::Identity();
+          turnVelocity = RmI.cast<float>();
+          toRotation = turnVelocity - hf * skew(rm.omega.cast<float>());
+        }
+        const Eigen::Vector3f xc = rm.centre.cast<float>(), vc = rm.velocity.cast<float>();
+        s.vPred.resize(n, 3);
+        s.xPred.resize(n, 3);
+        const std::array<float*, 3> x = writableColumns(s.x), xp = writableColumns(s.xPred),
+                                    v = writableColumns(s.v), vp = writableColumns(s.vPred);
+        forParticleRanges(n, [&](int begin, int end) {
+          for (int i = begin; i < end; ++i) {
+            const Eigen::Vector3f xi(x[0][i], x[1][i], x[2][i]), vi(v[0][i], v[1][i], v[2][i]);
+            const Eigen::Vector3f moved = xi + hf * vi + toRotation * (xi - xc) + fall;
+            const Eigen::Vector3f turned = vi + turnVelocity * (vi - vc);
+            for (int a = 0; a < 3; ++a) {
+              x[a][i] = xp[a][i] = moved[a];
+              vp[a][i] = turned[a];
+            }
+          }
+        });
+        for (int p : m.pinned) s.x.row(p) = s.xPred.row(p) = m.startPositions.row(p);
+      });
 }
 
 void runProjectPhase(const WorkLayout& layout, std::vector<BodySlot>& slots,
@@ -205,34 +234,55 @@ void runVelocitiesPhase(const WorkLayout& layout, const Vec3& gravity, double h,
                 BodySlot& b = slots[size_t(order[size_t(k)])];
                 const BodyModel& m = *b.model;
                 BodyState& s = b.state;
+                const int n = m.particleCount();
                 // v = v̂ + (x − x̂)/h + h·g: what the projections moved, on top of the velocity
                 // carried with the prediction (which lacks the h·g the prediction fell).
-                s.v = s.vPred + (s.x - s.xPred) * invH;
-                s.v.rowwise() += fallSpeed;
+                const std::array<float*, 3> x = writableColumns(s.x), xp = writableColumns(s.xPred),
+                                            v = writableColumns(s.v), vp = writableColumns(s.vPred);
+                forParticleRanges(n, [&](int begin, int end) {
+                  for (int a = 0; a < 3; ++a)
+                    for (int i = begin; i < end; ++i)
+                      v[a][i] = (vp[a][i] + (x[a][i] - xp[a][i]) * invH) + fallSpeed[a];
+                });
                 for (int p : m.pinned) s.v.row(p).setZero();
                 if (!m.pinned.empty()) return;
                 // The projections are torque-free about the predicted positions, not about the
                 // positions the momentum is measured at, and the chord Δx/h of a turning body
                 // is shorter than its tangent (by sin(hω)/(hω)): put the body's spin back to what
                 // it was before the sub-step.
-                const int n = m.particleCount();
                 const RigidMotion rm =
-                    rigidMotion(columnsOf(s.x), columnsOf(s.v), m.mass.data(), n);
+                    rigidMotionOnThreads(columnsOf(s.x), columnsOf(s.v), m.mass.data(), n);
                 const Eigen::Vector3f dw =
                     (rm.inverseInertia * (s.spin - rm.angularMomentum)).cast<float>();
                 if (dw.isZero()) return;
                 // v += dw × (x − xc) − shift: no linear momentum in exact arithmetic; the shift,
                 // its mass-weighted mean as evaluated in float, keeps rounding from adding any.
+                // The mean is summed in blocks of kRigidMotionBlock particles, blocks in order.
                 const Eigen::Vector3f xc = rm.centre.cast<float>();
-                double sum[3] = {0, 0, 0};
-                for (int i = 0; i < n; ++i)
-                  for (int a = 0; a < 3; ++a)
-                    sum[a] += double(m.mass[i]) * double(s.x(i, a) - xc[a]);
-                const Eigen::Vector3f shift =
-                    dw.cross((Vec3(sum[0], sum[1], sum[2]) / m.totalMass).cast<float>());
+                const int blocks = (n + kRigidMotionBlock - 1) / kRigidMotionBlock;
+                std::vector<Vec3> blockSums(static_cast<size_t>(blocks));
+                parallelRanges(blocks, n >= kMinParallelParticles ? 2 : INT32_MAX, 1 << 30,
+                               [&](int b0, int b1) {
+                                 for (int blk = b0; blk < b1; ++blk) {
+                                   double sum[3] = {0, 0, 0};
+                                   const int end = std::min(n, (blk + 1) * kRigidMotionBlock);
+                                   for (int i = blk * kRigidMotionBlock; i < end; ++i)
+                                     for (int a = 0; a < 3; ++a)
+                                       sum[a] += double(m.mass[i]) * double(s.x(i, a) - xc[a]);
+                                   blockSums[size_t(blk)] = Vec3(sum[0], sum[1], sum[2]);
+                                 }
+                               });
+                Vec3 sum = Vec3::Zero();
+                for (const Vec3& blockSum : blockSums) sum += blockSum;
+                const Eigen::Vector3f shift = dw.cross((sum / m.totalMass).cast<float>());
                 const Eigen::Matrix3f K = skew(dw);
-                for (int i = 0; i < n; ++i)
-                  s.v.row(i) += (K * (s.x.row(i).transpose() - xc) - shift).transpose();
+                forParticleRanges(n, [&](int begin, int end) {
+                  for (int i = begin; i < end; ++i) {
+                    const Eigen::Vector3f xi(x[0][i], x[1][i], x[2][i]);
+                    const Eigen::Vector3f dv = K * (xi - xc) - shift;
+                    for (int a = 0; a < 3; ++a) v[a][i] += dv[a];
+                  }
+                });
               });
 }
 
@@ -250,13 +300,16 @@ void runDampingPhase(const WorkLayout& layout, std::vector<BodySlot>& slots,
                 // The rigid motion with the body's momenta, pinned particles immovable: a pinned
                 // body keeps only the motion its pins allow (none for three pins or more), so its
                 // swing is damped like any other deformation.
-                const RigidMotion rm = rigidMotion(columnsOf(x), columnsOf(v), rigidWeights(m), n);
-                for (int i = 0; i < n; ++i) {
-                  const Vec3 r = x.row(i).transpose().cast<double>() - rm.centre;
-                  const Vec3 vi = v.row(i).transpose().cast<double>();
-                  const Vec3 rigid = rm.velocity + rm.omega.cross(r);
-                  v.row(i) = (vi + kd * (rigid - vi)).transpose().cast<float>();
-                }
+                const RigidMotion rm =
+                    rigidMotionOnThreads(columnsOf(x), columnsOf(v), rigidWeights(m), n);
+                forParticleRanges(n, [&](int begin, int end) {
+                  for (int i = begin; i < end; ++i) {
+                    const Vec3 r = x.row(i).transpose().cast<double>() - rm.centre;
+                    const Vec3 vi = v.row(i).transpose().cast<double>();
+                    const Vec3 rigid = rm.velocity + rm.omega.cross(r);
+                    v.row(i) = (vi + kd * (rigid - vi)).transpose().cast<float>();
+                  }
+                });
               });
 }
 

@@ -1,8 +1,34 @@
 #include "sim/world/sleep_phase.h"
 
+#include <algorithm>
+#include <climits>
+
+#include "sim/base/parallel_for.h"
 #include "sim/base/union_find.h"
 
 namespace sb {
+
+namespace {
+
+// Particles from which a body's fastest speed is searched on the pool's threads.
+constexpr int kMinParallelParticles = 32768;
+
+// max |vᵢ|² (m²/s²) over the rows of v (a maximum: the same bits for any split).
+float fastestSquared(const MatX3f& v) {
+  const int n = static_cast<int>(v.rows());
+  const int pieces = std::max(1, std::min(threadCount(), 64));
+  float piece[64] = {};
+  parallelRanges(pieces, n >= kMinParallelParticles ? 2 : INT32_MAX, 1 << 30, [&](int c0, int c1) {
+    for (int c = c0; c < c1; ++c) {
+      const int begin = int(1LL * n * c / pieces), end = int(1LL * n * (c + 1) / pieces);
+      piece[c] =
+          end > begin ? v.middleRows(begin, end - begin).rowwise().squaredNorm().maxCoeff() : 0.0f;
+    }
+  });
+  return *std::max_element(piece, piece + pieces);
+}
+
+}  // namespace
 
 bool runSleepPhase(double h, bool enabled, std::vector<BodySlot>& slots,
                    const std::vector<int>& awake, const std::vector<std::pair<int, int>>& touching,
@@ -11,7 +37,7 @@ bool runSleepPhase(double h, bool enabled, std::vector<BodySlot>& slots,
   for (int s : awake) {
     BodySlot& b = slots[size_t(s)];
     const float limit = b.model->sleepSpeed;
-    const float fastest2 = b.state.v.rowwise().squaredNorm().maxCoeff();
+    const float fastest2 = fastestSquared(b.state.v);
     if (fastest2 < limit * limit && !held[size_t(s)]) {
       b.sleep.still += h;
     } else {
