@@ -54,7 +54,8 @@ bool sameBits(const RigidMotion& a, const RigidMotion& b) {
 
 TEST(RigidMotion, RecoversARigidVelocityField) {
   const Cloud cloud(5000, 7);
-  const RigidMotion rm = rigidMotion(cloud.positions(), cloud.velocities(), cloud.mass.data(), 5000);
+  const RigidMotion rm =
+      rigidMotion(cloud.positions(), cloud.velocities(), cloud.mass.data(), 5000);
   // The oracle works in double on the same float inputs; the fit sums offsets (≤ 2 m) from the
   // first point in float lanes: a few float roundings (6e-8 relative) of those offsets.
   EXPECT_LT((rm.centre - cloud.centre).norm(), 1e-6);
