@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <random>
 
@@ -13,6 +14,7 @@
 #include "sim/mesh/closed_surface.h"
 #include "sim/mesh/mesh_io.h"
 #include "sim/world/contact/body_contact.h"
+#include "sim/world/contact/box_tree.h"
 #include "sim/world/contact/surface_grid.h"
 #include "sim/world/mass_properties.h"
 #include "test_util.h"
@@ -237,6 +239,62 @@ TEST(SurfaceGrid, CellHoldsEveryTriangleWithinReach) {
       }
     }
   }
+}
+
+// The box hierarchy's nearest-first search, with the bound lowered to each closer box found,
+// finds the box a pass over all boxes finds (nearest, ties to the lower index), visits every box
+// that the final bound admits, and on a bunny's triangle boxes visits a small part of them.
+TEST(BoxTree, NearestSearchMatchesAPassOverAllBoxes) {
+  const Shape s = bunnyCage(0.1, Vec3(3, 1, -2));
+  std::vector<Eigen::AlignedBox3f> boxes;
+  for (const mesh::Triangle& t : s.triangles) {
+    Eigen::AlignedBox3f b;
+    for (int i : t) b.extend(s.points[size_t(i)].cast<float>());
+    boxes.push_back(b);
+  }
+  // Duplicates: ties must still go to the lower index.
+  boxes.push_back(boxes[3]);
+  boxes.push_back(boxes[0]);
+  BoxTree tree;
+  tree.build(boxes);
+  ASSERT_FALSE(tree.empty());
+  auto distance2 = [&](int i, const Vec3f& p) {
+    const Vec3f below = (boxes[size_t(i)].min() - p).cwiseMax(0.0f),
+                above = (p - boxes[size_t(i)].max()).cwiseMax(0.0f);
+    return (below + above).squaredNorm();
+  };
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-1, 1);
+  long long visits = 0;
+  const int trials = 3000;
+  for (int trial = 0; trial < trials; ++trial) {
+    const Vec3f p = Vec3f(3, 1, -2) + 0.8f * test::drawVector<Vec3f>([&] { return u(rng); });
+    int brute = -1;
+    float bruteD = std::numeric_limits<float>::infinity();
+    for (int i = 0; i < int(boxes.size()); ++i)
+      if (distance2(i, p) < bruteD) bruteD = distance2(i, p), brute = i;
+    int best = -1;
+    float bound = std::numeric_limits<float>::infinity();
+    std::vector<char> seen(boxes.size(), 0);
+    tree.visitNear(
+        p, [&] { return bound; },
+        [&](int i) {
+          ++visits;
+          seen[size_t(i)] = 1;
+          const float d = distance2(i, p);
+          if (d < bound || (d == bound && i < best)) bound = d, best = i;
+        });
+    ASSERT_EQ(best, brute) << "point " << p.transpose();
+    for (int i = 0; i < int(boxes.size()); ++i)
+      if (distance2(i, p) <= bound) {
+        ASSERT_TRUE(seen[size_t(i)]) << "box " << i;
+      }
+  }
+  EXPECT_LT(double(visits) / trials, 0.25 * double(boxes.size()));
+  // A box with a non-finite centre leaves the tree empty (the caller scans all boxes).
+  boxes[1].max().x() = std::numeric_limits<float>::infinity();
+  tree.build(boxes);
+  EXPECT_TRUE(tree.empty());
 }
 
 // Closed forms: eight 1 kg masses at the corners (±1, ±1, ±1) + c have their centre at c and

@@ -117,13 +117,25 @@ bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle,
       // for the price of a box distance. (An empty grid kept no boxes: every triangle then.)
       best.distanceSquared = std::numeric_limits<float>::infinity();
       float deepBound = best.distanceSquared;
-      const bool haveBoxes = !grid.empty();
-      for (int t = 0; t < int(tris.size()); ++t) {
-        if (haveBoxes && grid.boxDistanceSquared(t, p) > deepBound) continue;
+      // The boxes come in a hierarchy, nearer subtrees first, so most of the surface goes for
+      // a few node tests; the result is the same as a pass over every triangle (the closest,
+      // ties to the lower index, whatever the order).
+      auto take = [&](int t) {
         if (consider(obstacle, p, t, best)) {
           const float d = std::sqrt(best.distanceSquared);
           deepBound = drift > 0.0f ? (d + drift) * (d + drift) : best.distanceSquared;
         }
+      };
+      if (!grid.boxTree().empty()) {
+        grid.boxTree().visitNear(
+            p, [&] { return deepBound; },
+            [&](int t) {
+              if (!(grid.boxDistanceSquared(t, p) > deepBound)) take(t);
+            });
+      } else {
+        const bool haveBoxes = !grid.empty();
+        for (int t = 0; t < int(tris.size()); ++t)
+          if (!haveBoxes || !(grid.boxDistanceSquared(t, p) > deepBound)) take(t);
       }
       if (best.triangle < 0) continue;
       deepHit = true;

@@ -16,6 +16,7 @@ void SurfaceGrid::build(const std::vector<mesh::Triangle>& triangles, const floa
   bounds_.max().array() += reach;
   bounds_ = bounds_.intersection(region);
   allTriangles_.clear();
+  boxTree_.build({});
   if (bounds_.isEmpty() || !bounds_.sizes().allFinite()) {  // no particle can ask: an empty grid
     bounds_.setEmpty();                                     // contains and intersects nothing
     dims_.setZero();
@@ -44,6 +45,7 @@ void SurfaceGrid::build(const std::vector<mesh::Triangle>& triangles, const floa
                         : Eigen::AlignedBox3i();  // empty: entered nowhere
     if (!cellBoxes_[t].isEmpty()) allTriangles_.push_back(int(t));
   }
+  boxTree_.build(triangleBoxes_);
   buildCsr(
       dims_.prod(),
       [&](const auto& emit) {

@@ -9,6 +9,7 @@
 #include "sim/base/csr.h"
 #include "sim/base/types.h"
 #include "sim/mesh/closed_surface.h"
+#include "sim/world/contact/box_tree.h"
 
 namespace sb {
 
@@ -51,6 +52,10 @@ class SurfaceGrid {
     return (below + above).squaredNorm();
   }
 
+  // Every triangle's build-time box in a hierarchy, for a search of the whole surface (the deep
+  // contact search); empty when the grid is (or a position was not finite).
+  const BoxTree& boxTree() const { return boxTree_; }
+
   static constexpr int maxCellsPerAxis = 48;
   static constexpr long long maxCellsPerLookup = 64;
   bool empty() const { return allTriangles_.empty(); }
@@ -64,6 +69,7 @@ class SurfaceGrid {
   Csr cells_;                      // the triangles entered in each cell, ascending
   std::vector<int> allTriangles_;  // every triangle entered in some cell, ascending
   std::vector<Eigen::AlignedBox3f> triangleBoxes_;  // per triangle, not grown
+  BoxTree boxTree_;                                 // over triangleBoxes_
   // Scratch kept between builds so a rebuild does not allocate: each triangle's cell range.
   std::vector<Eigen::AlignedBox3i> cellBoxes_;
   int cellIndex(int i, int j, int k) const { return (k * dims_.y() + j) * dims_.x() + i; }
