@@ -10,6 +10,11 @@
 
 namespace sb {
 
+// Loops that stream a few floats per particle fork from this many particles of one body: below,
+// the fork/join costs more than the second thread saves (one place for the passes inside a body:
+// predict, velocities, damping, its rigid motion, its fastest speed).
+inline constexpr int kMinParallelParticles = 32768;
+
 // Calls body(begin, end) on disjoint ranges covering [0, count), at most maxThreads of them
 // (≤ threadCount()) at a time, one contiguous range per thread. Serial (one call) when count is
 // below minParallel.

@@ -21,8 +21,6 @@ constexpr long long kMinParallelIntegration = 8192;
 // Per-body passes (predict, whole-body level, velocities, damping) fork only in worlds with at
 // least this many particles.
 constexpr long long kMinParallelBodyWork = 2048;
-// A single body's per-particle passes split over threads from this many particles on.
-constexpr int kMinParallelParticles = 32768;
 // A body's turn per sub-step below which the prediction moves along the tangent (the rotation's
 // second-order term, (hω)²/2 of the radius, is below float resolution of the positions there).
 constexpr double kMinTurn = 1e-3;
@@ -109,8 +107,8 @@ PointColumns columnsOf(const MatX3f& m) {
   return PointColumns{{m.col(0).data(), m.col(1).data(), m.col(2).data()}};
 }
 
-// Writable column pointers of a #P×3 array (x, y, z), for the per-particle loops: plain float
-// arrays the compiler vectorises across particles.
+// Writable column pointers of a #P×3 array (x, y, z), for the per-particle loops (no Eigen row
+// access, which strides by #P through the column-major array).
 std::array<float*, 3> writableColumns(MatX3f& m) {
   return {m.col(0).data(), m.col(1).data(), m.col(2).data()};
 }

@@ -93,9 +93,6 @@ RigidMotion rigidMotionFromSums(const RigidSums& s, const float origin[3]) {
   return r;
 }
 
-// Below this many points rigidMotionOnThreads sums on the calling thread.
-constexpr int kMinParallelRigidMotion = 32768;
-
 }  // namespace
 
 RigidMotion rigidMotion(const PointColumns& x, const PointColumns& v, const float* w, int count) {
@@ -111,7 +108,7 @@ RigidMotion rigidMotionOnThreads(const PointColumns& x, const PointColumns& v, c
   const float origin[3] = {x.c[0][0], x.c[1][0], x.c[2][0]};
   const int blocks = (count + kRigidMotionBlock - 1) / kRigidMotionBlock;
   std::vector<RigidSums> sums(static_cast<size_t>(blocks));
-  parallelFor(blocks, count >= kMinParallelRigidMotion ? 2 : INT32_MAX, [&](int b) {
+  parallelFor(blocks, count >= kMinParallelParticles ? 2 : INT32_MAX, [&](int b) {
     sums[size_t(b)] = rigidBlockSums(x, v, w, origin, b * kRigidMotionBlock,
                                      std::min(count, (b + 1) * kRigidMotionBlock));
   });

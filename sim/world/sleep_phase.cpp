@@ -10,9 +10,6 @@ namespace sb {
 
 namespace {
 
-// Particles from which a body's fastest speed is searched on the pool's threads.
-constexpr int kMinParallelParticles = 32768;
-
 // max |vᵢ|² (m²/s²) over the rows of v (a maximum: the same bits for any split).
 float fastestSquared(const MatX3f& v) {
   const int n = static_cast<int>(v.rows());

@@ -113,13 +113,12 @@ bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle,
       // kept only if the particle is inside (a particle deeper than one sub-step's travel: an
       // overlapping start or a drag into the body).
       // Triangles whose (build-time) boxes are farther than the best so far plus the grid's
-      // drift cannot be closer (as in the grid lookup above): most of the surface is skipped
-      // for the price of a box distance. (An empty grid kept no boxes: every triangle then.)
+      // drift cannot be closer (as in the grid lookup above). The boxes come in a hierarchy,
+      // nearer subtrees first, so most of the surface goes for a few node tests; the result is
+      // that of a pass over every triangle (the closest, ties to the lower index, whatever the
+      // order). Without a tree (an empty grid, or a non-finite position) every triangle is tried.
       best.distanceSquared = std::numeric_limits<float>::infinity();
       float deepBound = best.distanceSquared;
-      // The boxes come in a hierarchy, nearer subtrees first, so most of the surface goes for
-      // a few node tests; the result is the same as a pass over every triangle (the closest,
-      // ties to the lower index, whatever the order).
       auto take = [&](int t) {
         if (consider(obstacle, p, t, best)) {
           const float d = std::sqrt(best.distanceSquared);
