@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <ostream>
 #include <string_view>
 
@@ -144,7 +145,14 @@ Frame parseObjFrame(const std::string& d, const std::string& name) {
       if (f.bodies.empty()) frameFail(name, where + "a vertex before the first object");
       if (tokens.size() != 4) frameFail(name, where + "a vertex needs three numbers");
       double c[3];
-      for (int a = 0; a < 3; ++a) number(tokens[size_t(a) + 1], c[a]);
+      for (int a = 0; a < 3; ++a) {
+        number(tokens[size_t(a) + 1], c[a]);
+        // Positions are single precision: a finite double beyond float's range would become inf.
+        if (std::abs(c[a]) > double(std::numeric_limits<float>::max()))
+          frameFail(name, where + "coordinate '" +
+                              std::string(tokens[size_t(a) + 1].substr(0, 32)) +
+                              "' is beyond single precision");
+      }
       points.back().emplace_back(float(c[0]), float(c[1]), float(c[2]));
       if (++vertices > (1LL << 30)) frameFail(name, "too many vertices");
     } else if (tokens[0] == "f") {

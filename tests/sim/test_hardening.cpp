@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 #include "sim/base/parallel.h"
@@ -343,6 +344,19 @@ TEST_F(HardeningFiles, FramesRoundTrip) {
   const std::string bytes((std::istreambuf_iterator<char>(in)), {});
   EXPECT_THROW(parseFrame(bytes.substr(0, bytes.size() - 1), FrameFormat::Binary, "f"), FrameError);
   EXPECT_THROW(parseFrame(bytes + "x", FrameFormat::Binary, "f"), FrameError);
+  // An OBJ coordinate that is finite as a double but beyond single precision is refused, with its
+  // line; the largest float is accepted.
+  const std::string head = "# softbody frame, time 0 s\no a\n";
+  try {
+    parseFrame(head + "v 0 0 0\nv 1e300 0 0\n", FrameFormat::Obj, "f.obj");
+    ADD_FAILURE() << "a coordinate of 1e300 was accepted";
+  } catch (const FrameError& e) {
+    EXPECT_NE(std::string(e.what()).find("f.obj: line 4:"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(parseFrame(head + "v 0 -3.5e38 0\n", FrameFormat::Obj, "f"), FrameError);
+  EXPECT_EQ(
+      parseFrame(head + "v 0 0 -3.4028234e38\n", FrameFormat::Obj, "f").bodies[0].positions(0, 2),
+      -std::numeric_limits<float>::max());
   ASSERT_EQ(::mkfifo(path("fifo.bin").c_str(), 0600), 0);
   EXPECT_THROW(readFrame(path("fifo.bin")), FrameError);
 }
