@@ -315,6 +315,23 @@ void pushOut(std::vector<SolverBody>& bodies, const ContactPoint& c, float dista
   if (o.body) applyImpulse(o, ro, (-amount / k) * c.normal, shareFor(o), 0.0f, true);
 }
 
+// A contact's accumulated impulses (constraints A and B), to put them back.
+struct ContactImpulses {
+  float lambda[2];
+  Vec3f tangent[2];
+};
+
+ContactImpulses impulsesOf(const ContactPoint& c) {
+  return {{c.lambda[0], c.lambda[1]}, {c.tangent[0], c.tangent[1]}};
+}
+
+void setImpulses(ContactPoint& c, const ContactImpulses& saved) {
+  for (int j = 0; j < 2; ++j) {
+    c.lambda[j] = saved.lambda[j];
+    c.tangent[j] = saved.tangent[j];
+  }
+}
+
 }  // namespace
 
 void prepareSolverBody(SolverBody& b) {
@@ -366,9 +383,18 @@ void solveIsland(std::vector<SolverBody>& bodies, std::vector<ContactPoint>& poi
   // done) are solved with that below immovable, then the body is frozen. A stack's load then
   // reaches the floor in one pass instead of creeping down through the sweeps. (Mid-air
   // collisions are left alone: the one-sided pass does not conserve momentum.)
+  //
+  // The impulses this pass adds are applied but not remembered as the next sub-step's warm
+  // start: they were found against bodies held immovable, and the sweeps, where those bodies
+  // move, would re-apply them to bodies that cannot carry them — a very soft body (α 0.005) under
+  // a rigid one took the rigid body's whole weight on single particles and the pile reached
+  // 10⁴ m/s within a second (the soak's random parameters found it).
   bool grounded = false;
   for (int k : pointList) grounded = grounded || points[size_t(k)].obstacle < 0;
   if (grounded && !settings.up.isZero() && bodyList.size() > 1) {
+    std::vector<ContactImpulses> swept;
+    swept.reserve(pointList.size());
+    for (int k : pointList) swept.push_back(impulsesOf(points[size_t(k)]));
     std::vector<int> levels(bodyList);
     std::sort(levels.begin(), levels.end(), [&](int a, int b) {
       const float ha = bodies[size_t(a)].centre.dot(settings.up);
@@ -398,6 +424,8 @@ void solveIsland(std::vector<SolverBody>& bodies, std::vector<ContactPoint>& poi
       body.frozen = true;
     }
     for (int b : bodyList) bodies[size_t(b)].frozen = false;
+    for (size_t q = 0; q < pointList.size(); ++q)
+      setImpulses(points[size_t(pointList[q])], swept[q]);
   }
 
   // What is still inside is pushed out without velocity, at a bounded rate.
