@@ -3,6 +3,8 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
+#include <limits>
 
 namespace sb {
 
@@ -18,5 +20,11 @@ using ConstPointsRef =
 
 // Interleaved xyz rows (#P×3, row-major): the layout vertex buffers and OBJ files use.
 using PointsRowMajor = Eigen::Matrix<float, Eigen::Dynamic, 3, Eigen::RowMajor>;
+
+// Whether a value read as a double can be stored as a float (positions are single precision):
+// finite and |v| ≤ the largest float. A larger finite double would become infinity.
+inline bool fitsFloat(double v) {
+  return std::isfinite(v) && std::abs(v) <= double(std::numeric_limits<float>::max());
+}
 
 }  // namespace sb

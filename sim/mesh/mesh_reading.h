@@ -5,7 +5,6 @@
 #pragma once
 
 #include <algorithm>
-#include <cfloat>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -16,6 +15,7 @@
 #include <string_view>
 #include <vector>
 
+#include "sim/base/types.h"
 #include "sim/mesh/triangle_mesh.h"
 
 namespace sb::mesh::reading {
@@ -42,7 +42,7 @@ inline std::string numberText(double v) {
 // A coordinate every part of the program can hold: finite and within float range.
 inline void checkCoordinate(double c, const std::string& where) {
   if (!std::isfinite(c)) fail(where + "coordinate " + numberText(c) + " is not finite");
-  if (std::abs(c) > double(FLT_MAX))
+  if (!fitsFloat(c))
     fail(where + "coordinate " + numberText(c) + " is beyond float range (|c| ≤ 3.4e38)");
 }
 

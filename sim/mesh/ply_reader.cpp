@@ -77,9 +77,7 @@ class PlyValues {
       } else if (!parseDouble(tok, v)) {
         fail(where + "not a number: " + quoted(tok));
       }
-      return t == PlyType::Float32 && std::isfinite(v) && std::abs(v) <= double(FLT_MAX)
-                 ? double(float(v))
-                 : v;
+      return t == PlyType::Float32 && fitsFloat(v) ? double(float(v)) : v;
     }
     const char* what = "the element data";
     switch (t) {

@@ -5,11 +5,11 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
-#include <limits>
 #include <ostream>
 #include <string_view>
 
 #include "sim/base/file_io.h"
+#include "sim/base/types.h"
 
 namespace sb {
 
@@ -147,8 +147,7 @@ Frame parseObjFrame(const std::string& d, const std::string& name) {
       double c[3];
       for (int a = 0; a < 3; ++a) {
         number(tokens[size_t(a) + 1], c[a]);
-        // Positions are single precision: a finite double beyond float's range would become inf.
-        if (std::abs(c[a]) > double(std::numeric_limits<float>::max()))
+        if (!fitsFloat(c[a]))
           frameFail(name, where + "coordinate '" +
                               std::string(tokens[size_t(a) + 1].substr(0, 32)) +
                               "' is beyond single precision");
