@@ -385,8 +385,13 @@ TEST(Contact, FastBodyDoesNotTunnel) {
   BodyDef dSmall = bodyFrom(small, "small", Mode::Rigid, 1.0);
   dBig.totalMass = 5;
   dSmall.velocity = Vec3(30, 0, 0);  // 0.125 m per sub-step
-  // Restitution 0.5: the 1 kg body comes back at (1 − 0.5·5)/6 · 30 = −7.5 m/s. (With e = 0 it
-  // goes on with the 5 kg one at about 5 m/s: bouncing back needs e > 1/5.)
+  // Restitution 0.5: between rigid bodies the 1 kg body would come back at (1 − 0.5·5)/6 · 30 =
+  // −7.5 m/s. Against a soft body (α 0.5) restitution is not yet followed (docs/design.md §5.5,
+  // issue 11): the impact is stopped particle by particle and the 1 kg body keeps 0.4 m/s, an
+  // effective e of 0.18. Checked: below half the speed the two would share after a plastic
+  // impact (30/6 = 5 m/s), i.e. an effective e above 0.1. (It came back at
+  // −0.6 m/s while a contact aimed at the separating speed of a particle already leaving —
+  // energy from nowhere in piles, see ContactSolver.TouchingContactsOnlyTakeEnergyAway.)
   dBig.params.restitution = dSmall.params.restitution = 0.5;
   const BodyHandle hb = world.addBody(dBig), hs = world.addBody(dSmall);
   double deepest = 0;
@@ -395,7 +400,7 @@ TEST(Contact, FastBodyDoesNotTunnel) {
     deepest = std::max(deepest, deepestInside(world, hs, hb, big.triangles));
   }
   EXPECT_LT(world.centreOfMass(hs).x(), world.centreOfMass(hb).x());  // stayed on its side
-  EXPECT_LT(world.linearMomentum(hs).x(), 0.0);                       // bounced back
+  EXPECT_LT(world.linearMomentum(hs).x(), 0.5 * 30 / 6);
   EXPECT_LT(deepest, 0.05 * mesh::meanEdgeLength(small.triangles, small.points) + 0.02);
 }
 

@@ -3,7 +3,6 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
-#include <limits>
 
 #include "sim/world/mass_properties.h"
 
@@ -200,10 +199,13 @@ void prepareContact(std::vector<SolverBody>& bodies, ContactPoint& c,
   computeInverseMasses(p, o, c);
   // The approach now (after the integration) and where the particle was at the start of the
   // sub-step (positions follow velocities: x = x₀ + h·v): it may come as close as touching at
-  // the end of the sub-step; one already inside is stopped, not thrown out.
+  // the end of the sub-step; one already inside is stopped, not thrown out. Never a separating
+  // target: a contact only stops. (Aiming at the speed of a particle already leaving, constraint
+  // A pushed the whole soft body until its blended velocity matched the particle's; in a pile on
+  // a very soft body that made energy every sub-step until it blew up.)
   const float u0 = (pointVelocity(p, c.leverProbe) - pointVelocity(o, c.leverObstacle)).dot(n);
   const float start = c.distance0 - h * u0;
-  c.target = std::min(-start / h, std::max(u0, 0.0f));
+  c.target = std::min(-start / h, 0.0f);
   // Bounce only where the surfaces meet within this sub-step, faster than the threshold.
   if (c.restitution > 0.0f && -u0 > settings.restitutionThreshold && c.distance0 < 0.0f)
     c.target = std::max(c.target, -c.restitution * u0);
@@ -243,15 +245,16 @@ void solveConstraint(const Side& p, const Side& o, ContactPoint& c, bool blended
   const float sp = shareOf(p, blended), so = o.body ? shareOf(o, blended) : 0.0f;
   float& lambda = c.lambda[j];
   const float u = (measuredVelocity(p, rp, blended) - measuredVelocity(o, ro, blended)).dot(n);
-  // A never pushes harder than it takes to bring the particle itself to the target: where the
-  // body's rigid motion approaches but the particle does not (it is already being compressed),
-  // the blended measure would fling the light particle away.
-  float cap = std::numeric_limits<float>::infinity();
-  if (blended && c.pointInverseMass > 0.0f) {
+  // The projection onto the target (λ ≥ 0). A never pushes harder than it takes to bring the
+  // particle itself to the target: where the body's rigid motion approaches but the particle
+  // does not (it is already being compressed), the blended measure would fling the light
+  // particle away. That cap only limits an increase: taking back impulse while the measured
+  // velocity approaches (a step against the projection's) would make energy.
+  float next = std::max(lambda + (c.target - u) / k, 0.0f);
+  if (blended && next > lambda && c.pointInverseMass > 0.0f) {
     const float up = (pointVelocity(p, rp) - pointVelocity(o, ro)).dot(n);
-    cap = std::max(lambda + (c.target - up) / c.pointInverseMass, 0.0f);
+    next = std::min(next, std::max(lambda + (c.target - up) / c.pointInverseMass, lambda));
   }
-  const float next = std::min(std::max(lambda + (c.target - u) / k, 0.0f), cap);
   const float dl = next - lambda;
   lambda = next;
   if (dl != 0.0f) {
