@@ -6,7 +6,8 @@
 //   (x_{n+1} = x_n + h·v_{n+1}); a position push without the matching velocity was free work.
 //   The velocity target lets a particle approach until it touches at the end of the sub-step
 //   (speculative contact); one already inside is stopped, not thrown out, and no target asks
-//   for separation (restitution aside), so a visit only takes energy away. What is still inside
+//   for separation (restitution aside), so a normal visit only takes energy away (friction and
+//   the warm start still can add some: issue 18's soak). What is still inside
 //   afterwards is pushed out without velocity, at a bounded rate (at most kMaxPush spacings per
 //   sweep), so recovery cannot launch a body.
 // - Each contact is two constraints that can only remove energy, because each measures the
