@@ -48,18 +48,52 @@ struct Particles {
   }
 };
 
-// The eight corners of a cube of side 0.2 m with its lowest face at height y, each moving with
-// a random velocity; its top face (y + 0.2) as two triangles.
-Particles cube(float y, std::mt19937& rng, float speed) {
+// The eight corners of a box of the given size with its lowest face at height y (and, with
+// centreMass, a particle of that mass at its centre), each moving with a random velocity; its
+// top face as two triangles.
+Particles box(const Vec3f& size, float y, std::mt19937& rng, float speed, float centreMass = 0) {
   std::uniform_real_distribution<float> u(-speed, speed);
   Particles c;
   for (int k = 0; k < 8; ++k) {
-    const Vec3f p(0.2f * float(k & 1), y + 0.2f * float((k >> 1) & 1), 0.2f * float(k >> 2));
+    const Vec3f p(size.x() * float(k & 1), y + size.y() * float((k >> 1) & 1),
+                  size.z() * float(k >> 2));
     const float vx = u(rng), vy = u(rng), vz = u(rng);
     c.add(p, Vec3f(vx, vy, vz), 0.125f);
   }
   c.triangles = {{2, 7, 3}, {2, 6, 7}};  // the corners with (k >> 1) & 1 set: the top face
+  if (centreMass > 0) {                  // a ninth particle at the centre
+    const float vx = u(rng), vy = u(rng), vz = u(rng);
+    c.add(0.5f * size + Vec3f(0, y, 0), Vec3f(vx, vy, vz), centreMass);
+  }
   return c;
+}
+
+Particles cube(float y, std::mt19937& rng, float speed) {
+  return box(Vec3f::Constant(0.2f), y, rng, speed);
+}
+
+// The four bottom corners of `lower` on the floor and of `upper` on `lower`'s top face, each
+// 1 cm in, with friction mu.
+std::vector<ContactPoint> stackedContacts(float mu) {
+  std::vector<ContactPoint> points;
+  for (int body = 0; body < 2; ++body)
+    for (int i : {0, 1, 4, 5}) {
+      ContactPoint c;
+      c.probe = body;
+      c.particle = i;
+      if (body == 0) {
+        c.collider = 0;
+      } else {
+        c.obstacle = 0;
+        c.triangle = i < 4 ? 0 : 1;
+        c.weights = Vec3f::Constant(1.0f / 3);
+      }
+      c.normal = Vec3f::UnitY();
+      c.distance0 = -0.01f;
+      c.friction = mu;
+      points.push_back(c);
+    }
+  return points;
 }
 
 // Contacts whose particles touch or are inside, approaching no faster than the depth allows
@@ -77,27 +111,7 @@ TEST(ContactSolver, TouchingContactsOnlyTakeEnergyAway) {
     Particles lower = cube(-0.01f, rng, 1.0f), upper = cube(0.2f, rng, 1.0f);
     std::vector<SolverBody> bodies = {lower.view(shares[trial % 5]),
                                       upper.view(shares[(trial / 5) % 5])};
-    std::vector<ContactPoint> points;
-    for (int i : {0, 1, 4, 5}) {  // the lower cube's bottom corners on the floor, 1 cm in
-      ContactPoint c;
-      c.probe = 0;
-      c.particle = i;
-      c.collider = 0;
-      c.normal = Vec3f::UnitY();
-      c.distance0 = -0.01f;
-      points.push_back(c);
-    }
-    for (int i : {0, 1, 4, 5}) {  // the upper cube's bottom corners on the lower one's top
-      ContactPoint c;
-      c.probe = 1;
-      c.obstacle = 0;
-      c.particle = i;
-      c.triangle = i < 4 ? 0 : 1;
-      c.weights = Vec3f::Constant(1.0f / 3);
-      c.normal = Vec3f::UnitY();
-      c.distance0 = -0.01f;
-      points.push_back(c);
-    }
+    std::vector<ContactPoint> points = stackedContacts(0.0f);
     ContactSolverSettings settings;
     settings.h = 1.0f / 240;  // an approach of 1 m/s closes 4 mm: every contact stays inside
     const std::vector<Collider> floor = {Collider::plane(Vec3::UnitY(), 0.0, 0.0)};
@@ -109,6 +123,41 @@ TEST(ContactSolver, TouchingContactsOnlyTakeEnergyAway) {
     for (const ContactPoint& c : points) pushed += c.lambda[0] + c.lambda[1] > 0.0f;
   }
   EXPECT_GT(pushed, 400);  // the contacts did work: the check is not vacuous
+}
+
+// Friction too, for the whole solve: each friction visit takes the lowest kinetic energy
+// within the cone in the metric of the contact's effective inverse mass K (friction_cone.h;
+// tests/sim/test_friction_cone.cpp checks the visit itself, including a case where the radial
+// clamp used before adds energy). Here K is made anisotropic — long flat slabs with most of
+// their mass at the centre, contacts at their far corners, so their rigid shares turn far more
+// easily about some axes than others — and the friction is often at its limit.
+TEST(ContactSolver, FrictionOnlyTakesEnergyAway) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> mu(0.1f, 1.5f);
+  const float shares[] = {0.0f, 0.005f, 0.3f, 0.7f, 1.0f};
+  int sliding = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    Particles lower = box(Vec3f(1.6f, 0.02f, 0.1f), -0.01f, rng, 1.0f, 12.0f);
+    Particles upper = box(Vec3f(0.1f, 0.1f, 1.2f), 0.02f, rng, 1.0f, 12.0f);
+    std::vector<SolverBody> bodies = {lower.view(shares[trial % 5]),
+                                      upper.view(shares[(trial / 5) % 5])};
+    std::vector<ContactPoint> points = stackedContacts(mu(rng));
+    ContactSolverSettings settings;
+    settings.h = 1.0f / 240;
+    const std::vector<Collider> floor = {Collider::plane(Vec3::UnitY(), 0.0, 0.0)};
+    const double before = lower.kineticEnergy() + upper.kineticEnergy();
+    solveIsland(bodies, points, {0, 1}, {0, 1, 2, 3, 4, 5, 6, 7}, floor, settings);
+    for (SolverBody& b : bodies) finishSolverBody(b);
+    const double after = lower.kineticEnergy() + upper.kineticEnergy();
+    EXPECT_LE(after, before * (1 + 1e-5) + 1e-9) << "trial " << trial;
+    for (const ContactPoint& c : points)
+      for (int j = 0; j < 2; ++j) {
+        EXPECT_LE(c.tangent[j].norm(), c.friction * c.lambda[j] * (1 + 1e-5f) + 1e-9f);
+        sliding += c.lambda[j] > 0.0f &&
+                   c.tangent[j].norm() > 0.999f * c.friction * c.lambda[j];  // on the cone
+      }
+  }
+  EXPECT_GT(sliding, 200);  // friction reached its limit often: the cone was exercised
 }
 
 }  // namespace

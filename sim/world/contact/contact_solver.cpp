@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "sim/world/contact/friction_cone.h"
 #include "sim/world/mass_properties.h"
 
 namespace sb {
@@ -179,10 +180,18 @@ void applyImpulse(const Side& s, const Vec3f& r, const Vec3f& J, float share, fl
 // sides' current fixed/immovable state.
 void computeInverseMasses(const Side& p, const Side& o, ContactPoint& c) {
   const Vec3f dirs[3] = {c.normal, c.tangent1, c.tangent2};
-  for (int j = 0; j < 2; ++j)
-    for (int d = 0; d < 3; ++d)
-      c.inverseMass[j][d] = measuredInverseMass(p, c.leverProbe, dirs[d], j == 0) +
-                            measuredInverseMass(o, c.leverObstacle, dirs[d], j == 0);
+  // The tangent coupling by polarisation: q(d) = dᵀKd along the diagonals u, w of the tangent
+  // basis gives K₁₂ = (q(u) − q(w)) / 2.
+  const Vec3f u = (c.tangent1 + c.tangent2) * std::sqrt(0.5f);
+  const Vec3f w = (c.tangent1 - c.tangent2) * std::sqrt(0.5f);
+  for (int j = 0; j < 2; ++j) {
+    auto q = [&](const Vec3f& d) {
+      return measuredInverseMass(p, c.leverProbe, d, j == 0) +
+             measuredInverseMass(o, c.leverObstacle, d, j == 0);
+    };
+    for (int d = 0; d < 3; ++d) c.inverseMass[j][d] = q(dirs[d]);
+    c.tangentCoupling[j] = 0.5f * (q(u) - q(w));
+  }
   c.pointInverseMass =
       pointInverseMass(p, c.leverProbe, c.normal) + pointInverseMass(o, c.leverObstacle, c.normal);
 }
@@ -250,28 +259,37 @@ void solveConstraint(const Side& p, const Side& o, ContactPoint& c, bool blended
   // does not (it is already being compressed), the blended measure would fling the light
   // particle away. That cap only limits an increase: taking back impulse while the measured
   // velocity approaches (a step against the projection's) would make energy.
-  float next = std::max(lambda + (c.target - u) / k, 0.0f);
-  if (blended && next > lambda && c.pointInverseMass > 0.0f) {
+  float nextLambda = std::max(lambda + (c.target - u) / k, 0.0f);
+  if (blended && nextLambda > lambda && c.pointInverseMass > 0.0f) {
     const float up = (pointVelocity(p, rp) - pointVelocity(o, ro)).dot(n);
-    next = std::min(next, std::max(lambda + (c.target - up) / c.pointInverseMass, lambda));
+    nextLambda =
+        std::min(nextLambda, std::max(lambda + (c.target - up) / c.pointInverseMass, lambda));
   }
-  const float dl = next - lambda;
-  lambda = next;
+  const float dl = nextLambda - lambda;
+  lambda = nextLambda;
   if (dl != 0.0f) {
     applyImpulse(p, rp, dl * n, sp, h, false);
     applyImpulse(o, ro, -dl * n, so, h, false);
   }
-  if (!(c.friction > 0.0f) || !(c.inverseMass[j][1] > 0.0f && c.inverseMass[j][2] > 0.0f)) return;
+  if (!(c.friction > 0.0f)) return;
   const Vec3f rel = measuredVelocity(p, rp, blended) - measuredVelocity(o, ro, blended);
+  const Vec3f& t1 = c.tangent1;
+  const Vec3f& t2 = c.tangent2;
+  const Eigen::Matrix2f K{{c.inverseMass[j][1], c.tangentCoupling[j]},
+                          {c.tangentCoupling[j], c.inverseMass[j][2]}};
+  const float det = K.determinant();
+  if (!(K(0, 0) > 0.0f && K(1, 1) > 0.0f && det > 1e-6f * K(0, 0) * K(1, 1))) return;
   Vec3f& tangent = c.tangent[j];
-  Vec3f next2 = tangent - (rel.dot(c.tangent1) / c.inverseMass[j][1]) * c.tangent1 -
-                (rel.dot(c.tangent2) / c.inverseMass[j][2]) * c.tangent2;
-  const float limit = c.friction * lambda;
-  const float len = next2.norm();
-  if (len > limit) next2 *= len > 0.0f ? limit / len : 0.0f;
-  const Vec3f dJ = next2 - tangent;
-  tangent = next2;
-  if (dJ.isZero()) return;
+  const Eigen::Vector2f before(tangent.dot(t1), tangent.dot(t2));
+  // Coulomb friction as maximal dissipation in the metric of K (friction_cone.h): the radial
+  // clamp used before could end at a higher energy than the visit started from when K is
+  // anisotropic.
+  const Eigen::Vector2f next =
+      frictionImpulse(K, Eigen::Vector2f(rel.dot(t1), rel.dot(t2)), before, c.friction * lambda);
+  const Eigen::Vector2f change = next - before;
+  tangent = next.x() * t1 + next.y() * t2;
+  if (change.isZero()) return;
+  const Vec3f dJ = change.x() * t1 + change.y() * t2;
   applyImpulse(p, rp, dJ, sp, h, false);
   applyImpulse(o, ro, -dJ, so, h, false);
 }

@@ -6,8 +6,10 @@
 //   (x_{n+1} = x_n + h·v_{n+1}); a position push without the matching velocity was free work.
 //   The velocity target lets a particle approach until it touches at the end of the sub-step
 //   (speculative contact); one already inside is stopped, not thrown out, and no target asks
-//   for separation (restitution aside), so a normal visit only takes energy away (friction and
-//   the warm start still can add some: issue 18's soak). What is still inside
+//   for separation (restitution aside), so a normal visit only takes energy away, and so does a
+//   friction visit (maximal dissipation in the contact's own metric: friction_cone.h), except
+//   where a friction impulse must shrink with a normal impulse that dropped; the warm start can
+//   add some too. What is still inside
 //   afterwards is pushed out without velocity, at a bounded rate (at most kMaxPush spacings per
 //   sweep), so recovery cannot launch a body.
 // - Each contact is two constraints that can only remove energy, because each measures the
@@ -106,11 +108,13 @@ struct ContactPoint {
 
   // Fixed for the sub-step by the solve: the relative normal velocity aimed at (m/s), lever
   // arms from the bodies' centres, a tangent basis, and the effective inverse masses of A and
-  // B along n, t1, t2; pointInverseMass: how far the particle itself moves per unit impulse of A.
+  // B along n, t1, t2 and their coupling between t1 and t2 (the off-diagonal of the tangent
+  // block); pointInverseMass: how far the particle itself moves per unit impulse of A.
   float target = 0;
   Vec3f leverProbe = Vec3f::Zero(), leverObstacle = Vec3f::Zero();
   Vec3f tangent1 = Vec3f::Zero(), tangent2 = Vec3f::Zero();
   float inverseMass[2][3] = {{0, 0, 0}, {0, 0, 0}};
+  float tangentCoupling[2] = {0, 0};
   float pointInverseMass = 0;
 };
 
