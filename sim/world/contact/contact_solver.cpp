@@ -19,9 +19,6 @@ constexpr int kPositionSweeps = 2;
 // velocity are free work, so they are rate-bounded (a pile whose residue was projected out at
 // once kept buzzing at 0.1 m/s).
 constexpr float kMaxPush = 0.02f;
-// A particle deeper than this (spacings of the probe) is pushed out by moving the bodies as a
-// whole: a local push of a soft body's particle would be undone by its goal at the next step.
-constexpr float kDeepRecovery = 0.25f;
 
 Eigen::Matrix3f rotationOf(const Vec3f& turn) {
   const float angle = turn.norm();
@@ -316,24 +313,28 @@ float currentDistance(std::vector<SolverBody>& bodies, const ContactPoint& c,
   return (xp - xo).dot(c.normal) - ob.gap;
 }
 
-// Position-only push of what is still inside, at most maxPush metres.
+// Position-only push of what is still inside, at most kMaxPush spacings, moving the bodies as a
+// whole (their recovery share; pinned bodies locally). Pushing a soft body's particle on its
+// own deforms the body without velocity: that is elastic energy from nowhere, which shape
+// matching turns into speed at the next sub-step. Under a pile held together by friction these
+// pushes fed energy in every sub-step until the pile blew up (issue 18's soak, seeds 1234 and 7;
+// without local pushes both run clean). A whole-body push stores no deformation; it is free
+// work only against gravity, and rate-bounded.
 void pushOut(std::vector<SolverBody>& bodies, const ContactPoint& c, float distance) {
   if (!(distance < 0.0f)) return;
   const Side p = probeSide(bodies, c), o = obstacleSide(bodies, c);
   const float spacing = p.body->spacing > 0.0f ? p.body->spacing : 0.05f;
-  const bool deep = distance < -kDeepRecovery * spacing;
-  auto shareFor = [&](const Side& s) { return deep ? s.body->recoveryShare : s.body->rigidShare; };
   const Vec3f rp = leverArm(p), ro = leverArm(o);
   auto kPos = [&](const Side& s, const Vec3f& r) {
     if (!s.body || s.body->fixed()) return 0.0f;
-    const float sh = shareFor(s);
+    const float sh = s.body->recoveryShare;
     return (1.0f - sh) * localInverseMass(s) + sh * rigidInverseMass(*s.body, r, c.normal);
   };
   const float k = kPos(p, rp) + kPos(o, ro);
   if (!(k > 0.0f)) return;
   const float amount = std::min(-distance, kMaxPush * spacing);
-  applyImpulse(p, rp, (amount / k) * c.normal, shareFor(p), 0.0f, true);
-  if (o.body) applyImpulse(o, ro, (-amount / k) * c.normal, shareFor(o), 0.0f, true);
+  applyImpulse(p, rp, (amount / k) * c.normal, p.body->recoveryShare, 0.0f, true);
+  if (o.body) applyImpulse(o, ro, (-amount / k) * c.normal, o.body->recoveryShare, 0.0f, true);
 }
 
 // A contact's accumulated impulses (constraints A and B), to put them back.

@@ -9,9 +9,9 @@
 //   for separation (restitution aside), so a normal visit only takes energy away, and so does a
 //   friction visit (maximal dissipation in the contact's own metric: friction_cone.h), except
 //   where a friction impulse must shrink with a normal impulse that dropped; the warm start can
-//   add some too. What is still inside
-//   afterwards is pushed out without velocity, at a bounded rate (at most kMaxPush spacings per
-//   sweep), so recovery cannot launch a body.
+//   add some too. What is still inside afterwards is pushed out without velocity, at a bounded
+//   rate (at most kMaxPush spacings per sweep), so recovery cannot launch a body, and by moving
+//   the bodies as a whole, so it stores no deformation that shape matching would turn into speed.
 // - Each contact is two constraints that can only remove energy, because each measures the
 //   velocity its own impulse distribution acts on (the impulse is M⁻¹Cᵀλ of the row C it
 //   measures): A, split between the particle (1 − s) and the body's rigid motion (s, as a rigid
@@ -50,7 +50,8 @@ struct SolverBody {
   // Share of constraint A taken by the rigid motion, in [0, 1] (the World uses α; 0 for bodies
   // with pinned particles); share 1 also answers B as a whole.
   float rigidShare = 0;
-  // Share of deep-penetration pushes taken as a whole: 1, or 0 for pinned bodies.
+  // Share of the position-only pushes (what is still inside after the velocity sweeps) taken
+  // by the body as a whole: 1, or 0 for pinned bodies.
   float recoveryShare = 1;
   bool immovable = false;  // a sleeping body: an obstacle that does not move this sub-step
   bool frozen = false;     // shock propagation: immovable while set
