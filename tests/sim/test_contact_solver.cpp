@@ -160,5 +160,38 @@ TEST(ContactSolver, FrictionOnlyTakesEnergyAway) {
   EXPECT_GT(sliding, 200);  // friction reached its limit often: the cone was exercised
 }
 
+// What is still inside after the velocity sweeps is pushed out without velocity; the push moves
+// the body as a whole, so a soft body's shape is not changed by it (a local push stored
+// deformation without velocity, which shape matching turned into speed: elastic energy from
+// nowhere, which blew up the soak's pile). A resting soft cube 1 cm into the floor, at rest:
+// the velocity sweeps have nothing to do, the pushes lift it rigidly by at most their rate.
+TEST(ContactSolver, PushesOutAsAWholeWithoutDeforming) {
+  for (float share : {0.0f, 0.005f, 0.5f}) {
+    std::mt19937 rng(3);
+    Particles soft = cube(-0.01f, rng, 0.0f);
+    std::vector<SolverBody> bodies = {soft.view(share)};
+    std::vector<ContactPoint> points = stackedContacts(0.6f);
+    points.resize(4);  // the floor contacts only
+    ContactSolverSettings settings;
+    settings.h = 1.0f / 240;
+    const std::vector<Collider> floor = {Collider::plane(Vec3::UnitY(), 0.0, 0.0)};
+    const Particles before = soft;
+    solveIsland(bodies, points, {0}, {0, 1, 2, 3}, floor, settings);
+    finishSolverBody(bodies[0]);
+    auto at = [](const Particles& p, int i) { return Vec3f(p.x[0][i], p.x[1][i], p.x[2][i]); };
+    for (int i = 0; i < 8; ++i) {
+      for (int j = i + 1; j < 8; ++j)
+        EXPECT_NEAR((at(soft, i) - at(soft, j)).norm(), (at(before, i) - at(before, j)).norm(),
+                    1e-6f)
+            << "share " << share << ", particles " << i << " and " << j;
+      EXPECT_EQ(soft.v[1][size_t(i)], 0.0f) << "share " << share;  // no velocity from the push
+    }
+    // Lifted, by at most 2 sweeps × 4 contacts × 2 % of a spacing (0.1 m) and not past the floor.
+    const float lift = at(soft, 0).y() - at(before, 0).y();
+    EXPECT_GT(lift, 0.001f) << "share " << share;
+    EXPECT_LE(lift, 0.01f + 1e-6f) << "share " << share;
+  }
+}
+
 }  // namespace
 }  // namespace sb
