@@ -274,6 +274,8 @@ void solveConstraint(const Side& p, const Side& o, ContactPoint& c, bool blended
   const Vec3f& t2 = c.tangent2;
   const Eigen::Matrix2f K{{c.inverseMass[j][1], c.tangentCoupling[j]},
                           {c.tangentCoupling[j], c.inverseMass[j][2]}};
+  // K is positive definite whenever a side can move (a particle's own share and a body's 1/M
+  // respond alike in every direction); otherwise (both sides fixed) there is nothing to rub.
   const float det = K.determinant();
   if (!(K(0, 0) > 0.0f && K(1, 1) > 0.0f && det > 1e-6f * K(0, 0) * K(1, 1))) return;
   Vec3f& tangent = c.tangent[j];
@@ -318,8 +320,9 @@ float currentDistance(std::vector<SolverBody>& bodies, const ContactPoint& c,
 // own deforms the body without velocity: that is elastic energy from nowhere, which shape
 // matching turns into speed at the next sub-step. Under a pile held together by friction these
 // pushes fed energy in every sub-step until the pile blew up (issue 18's soak, seeds 1234 and 7;
-// without local pushes both run clean). A whole-body push stores no deformation; it is free
-// work only against gravity, and rate-bounded.
+// without local pushes both run 1,500 steps clean, though the 20,000-step soak still fails
+// later: another source remains). A whole-body push stores no deformation; it is free work only
+// against gravity, and rate-bounded.
 void pushOut(std::vector<SolverBody>& bodies, const ContactPoint& c, float distance) {
   if (!(distance < 0.0f)) return;
   const Side p = probeSide(bodies, c), o = obstacleSide(bodies, c);
