@@ -6,8 +6,8 @@
 #                        ThreadSanitizer into build/tsan, warnings as errors (the second
 #                        compiler: CI's one clang build of everything), and runs all but the
 #                        viewer and soak tests; the results, golden hash included, are GCC's;
-#   SOFTBODY_SOAK=1      also runs the soak tests (CTest label "soak"; not in CI for now, see .ci/run:
-#                        since the contact rework they take well over 15 min).
+#   SOFTBODY_SOAK=1      also runs the soak tests (CTest label "soak", ~2.5 min on 2 cores;
+#                        CI runs them in its GCC stage, see .ci/run).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 "$root/scripts/install-deps.sh"
