@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <stdexcept>
 
 #include "sim/base/file_io.h"
@@ -256,7 +257,8 @@ Embedding Embedding::fromBytes(const std::string& data, const std::string& path,
   Embedding e;
   if (sparse) {
     const auto nnz = rd.get<std::int64_t>();
-    if (nnz < 0 || nnz > rows * cols) throw std::runtime_error(path + ": bad nonzero count");
+    if (nnz < 0 || nnz > rows * cols || nnz > std::numeric_limits<int>::max())
+      throw std::runtime_error(path + ": bad nonzero count");
     const std::size_t need =
         static_cast<std::size_t>(rows + 1) * 8 + static_cast<std::size_t>(nnz) * (4 + 8);
     if (rd.pos + need != body.size())
@@ -265,8 +267,6 @@ Embedding Embedding::fromBytes(const std::string& data, const std::string& path,
     for (auto& o : outer) o = rd.get<std::int64_t>();
     std::vector<int> inner(static_cast<std::size_t>(nnz));
     for (auto& v : inner) v = rd.get<int>();
-    std::vector<Eigen::Triplet<double>> trips;
-    trips.reserve(static_cast<std::size_t>(nnz));
     if (outer[0] != 0 || outer[static_cast<std::size_t>(rows)] != nnz)
       throw std::runtime_error(path + ": bad row offsets");
     // All offsets checked before any is used: non-decreasing from 0 to nnz keeps every one in
@@ -274,20 +274,31 @@ Embedding Embedding::fromBytes(const std::string& data, const std::string& path,
     // `inner` before the later, smaller one was seen).
     for (std::int64_t r = 0; r < rows; ++r)
       if (outer[r + 1] < outer[r]) throw std::runtime_error(path + ": bad row offsets");
+    // Columns strictly ascending within a row, as save writes them: the arrays then are the
+    // compressed row storage itself and are copied into place. (Building from triplets cost
+    // time and memory in proportion to the header's column count, which a 100-byte file can set
+    // to 2^30: the fuzzer timed out on one.)
     for (std::int64_t r = 0; r < rows; ++r) {
+      int previous = -1;
       for (std::int64_t q = outer[r]; q < outer[r + 1]; ++q) {
         const int c = inner[static_cast<std::size_t>(q)];
         if (c < 0 || c >= cols) throw std::runtime_error(path + ": column index out of range");
-        trips.emplace_back(static_cast<int>(r), c, 0.0);
+        if (c <= previous)
+          throw std::runtime_error(path + ": columns of row " + std::to_string(r) +
+                                   " not strictly ascending");
+        previous = c;
       }
     }
-    for (auto& t : trips) {
+    SparseD W(rows, cols);
+    W.resizeNonZeros(static_cast<Eigen::Index>(nnz));
+    for (std::int64_t r = 0; r <= rows; ++r)
+      W.outerIndexPtr()[r] = static_cast<int>(outer[static_cast<std::size_t>(r)]);
+    std::copy(inner.begin(), inner.end(), W.innerIndexPtr());
+    for (std::int64_t q = 0; q < nnz; ++q) {
       const double v = rd.get<double>();
       if (!std::isfinite(v)) throw std::runtime_error(path + ": non-finite weight");
-      t = Eigen::Triplet<double>(t.row(), t.col(), v);
+      W.valuePtr()[q] = v;
     }
-    SparseD W(rows, cols);
-    W.setFromTriplets(trips.begin(), trips.end());
     e = fromSparse(std::move(W));
   } else {
     const std::size_t need = static_cast<std::size_t>(rows * cols) * 8;

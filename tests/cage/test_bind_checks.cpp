@@ -96,6 +96,48 @@ TEST_F(BindChecks, ImplausibleStatisticsAreRefused) {
   }
 }
 
+// A sparse file: magic, version, key[2], rows, cols, sparse, stat count, 15 stats, nonzero count,
+// rows + 1 row offsets (8 bytes), column indices (4 bytes), weights (8 bytes), checksum.
+TEST_F(BindChecks, SparseColumnsMustAscendAndTheColumnCountCostsNothing) {
+  options_.storage = WeightStorage::Sparse;
+  const Embedding first = bindMeanValue(points_, cage_, options_);
+  ASSERT_TRUE(first.isSparse());
+  const std::string good = read(cacheFile());
+  const size_t kCols = 5 * 8, kNnz = kWeights, kInner = kNnz + 8 + (20 + 1) * 8;
+  std::int64_t nnz;
+  std::memcpy(&nnz, &good[kNnz], 8);
+  ASSERT_EQ(nnz, 20 * 8);  // no weight pruned inside a box: rows of 8 ascending columns
+
+  std::string bytes = good;  // row 0's second column made equal to its first
+  std::memcpy(&bytes[kInner + 4], &bytes[kInner], 4);
+  writeResealed(cacheFile(), bytes);
+  try {
+    Embedding::load(cacheFile());
+    FAIL() << "repeated column accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("columns of row 0 not strictly ascending"),
+              std::string::npos)
+        << e.what();
+  }
+
+  // A header claiming 2^30 cage vertices: loaded in time and memory proportional to the file
+  // (the triplet build before allocated 4 bytes per claimed column twice, 8 GB; the fuzzer's
+  // timeout), and the weights read back are the ones written.
+  bytes = good;
+  const std::int64_t huge = std::int64_t(1) << 30;
+  std::memcpy(&bytes[kCols], &huge, 8);
+  writeResealed(cacheFile(), bytes);
+  const Embedding wide = Embedding::load(cacheFile());
+  EXPECT_EQ(wide.cageVertexCount(), huge);
+  EXPECT_EQ(wide.meshVertexCount(), 20);
+  std::vector<std::pair<int, double>> a, b;
+  for (int i = 0; i < 20; ++i) {
+    first.rowWeights(i, a);
+    wide.rowWeights(i, b);
+    EXPECT_EQ(a, b) << "row " << i;
+  }
+}
+
 TEST_F(BindChecks, NonRegularCacheEntriesAreRefusedNotRead) {
   bindMeanValue(points_, cage_, options_);
   fs::remove(cacheFile());
