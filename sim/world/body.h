@@ -86,6 +86,9 @@ struct BodyModel {
   // Sleep: the body may sleep once every particle has been slower than this for a while (m/s;
   // scaled to its size, world.cpp).
   float sleepSpeed = 0;
+  // The reach: no particle ends a goal projection farther than this from its goal (m; the
+  // rest radius of gyration, ×kReachOfGyration; docs/design.md §5.3).
+  float reach = 0;
 
   int clusterCount() const { return static_cast<int>(clusterRest.size()); }
   int particleCount() const { return static_cast<int>(rest.rows()); }

@@ -12,6 +12,11 @@ namespace {
 constexpr int kMembersPerTask = 8192;        // cluster members per moment task
 constexpr double kSleepSpeedPerSize = 0.05;  // 1/s: sleep speed per metre of size
 constexpr double kMaxSleepSpeed = 0.05;      // m/s
+// The reach per rest radius of gyration (docs/design.md §5.3): a particle may end a goal
+// projection at most that far from its goal (a bunny of 0.55 m: ~0.16 m). The soak's bodies at
+// α ≥ 0.05 never came near it (they grew at most 1.41×); without it, a bunny at α 0.004 under
+// the large scene's pile spread to 10× its size, and one at α 0 under three heavy bunnies to 27×.
+constexpr double kReachOfGyration = 1.0;
 
 // Everything that depends on the clusters: membership both ways, particle groups, matching
 // weights, rest models, moment tasks, member rest offsets and batches.
@@ -124,6 +129,9 @@ std::shared_ptr<BodyModel> buildBodyModel(const BodyDef& def,
   Eigen::AlignedBox3d box;
   for (const Vec3& p : def.positions) box.extend(p);
   m->sleepSpeed = float(std::min(kMaxSleepSpeed, kSleepSpeedPerSize * box.diagonal().norm()));
+  double inertia = 0;  // Σ m|r|², r from the rest centre of mass (the body frame's origin)
+  for (int i = 0; i < n; ++i) inertia += double(m->mass[i]) * double(m->rest.row(i).squaredNorm());
+  m->reach = float(kReachOfGyration * std::sqrt(inertia / m->totalMass));
   m->bodyWeight = m->mass;
   for (int p : m->pinned) m->bodyWeight[p] *= kPinnedWeightFactor;
   buildClusters(*m, def.clusters);

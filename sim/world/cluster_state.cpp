@@ -250,7 +250,7 @@ bool ClusterState::projectWholeBody(const BodyModel& m, const BodyParams& params
   const GoalTransform goal = goalTransform(fit, sum, bodyRest, bodyShape, Mat3::Identity(), params);
   const PositionColumns p{x.col(0).data(), x.col(1).data(), x.col(2).data()};
   const RestColumns r{rest.col(0).data(), rest.col(1).data(), rest.col(2).data()};
-  return projectOntoTransform(p, r, 0, n, goal, quadratic, float(params.alpha)) != 0;
+  return projectOntoTransform(p, r, 0, n, goal, quadratic, float(params.alpha), m.reach) != 0;
 }
 
 GoalTransform ClusterState::goal(int c) const {

@@ -57,7 +57,7 @@ bool projectBlock(const BodyModel& m, BodyState& s, const BodyParams& params, in
   auto run = [&](auto goal) { return projectRange(p, begin, end, alpha, goal) != 0; };
   if (m.wholeBodyCluster)
     return projectOntoTransform(p, RestColumns{rx, ry, rz}, begin, end, s.clusters.goal(0),
-                                quadratic, alpha) != 0;
+                                quadratic, alpha, m.reach) != 0;
   const int* start = m.particleClusters.start.data();
   const int* clusterOf = m.particleClusters.items.data();
   const float* invCount = m.invCount.data();

@@ -485,6 +485,57 @@ TEST(Contact, VerySoftBodyUnderStifferOnesStaysBounded) {
   EXPECT_LT(fastest, bound);
 }
 
+// A body with no stiffness at all (α = 0, the bottom of the accepted range, β 0.97) under three
+// rigid bunnies of 20× its mass: it is a fluid and the pile sinks through it to the floor, but,
+// held by its reach (no particle farther from its goal than the body's radius of gyration), it
+// stays in one piece. Measured over 20 s (2-core VM): its diagonal at most 1.78× the rest one;
+// without the reach it spread to 22× within 10 s and 27× by 20 s (the soak's failure, issue 18:
+// a bunny at α 0.004 under the large scene's pile spread to 10×, contacts against its folded
+// surface multiplied and the soak ended in NaN). Not asserted, because not yet true: the goo's
+// particles still jitter (single particles up to 11 m/s, snapped back within reach), and its
+// surface ends up inside out (docs/design.md §5.3).
+TEST(Contact, BodyWithoutStiffnessUnderAPileStaysWithinItsReach) {
+  World w = floorWorld();
+  WorldSettings awake = w.settings();
+  awake.sleep = false;
+  w.setSettings(awake);
+  auto onFloorAt = [](Shape s, double height) {  // lowest point at `height`
+    double low = 1e30;
+    for (const Vec3& p : s.points) low = std::min(low, p.y());
+    for (Vec3& p : s.points) p.y() += height - low;
+    return s;
+  };
+  const Shape gooShape = onFloorAt(bunnyCage(0.07, Vec3::Zero()), 0.01);
+  BodyDef goo = bodyFrom(gooShape, "goo", Mode::Linear, 0.0);
+  goo.params.beta = 0.97;
+  goo.totalMass = 1;
+  const BodyHandle g = w.addBody(goo);
+  auto diagonal = [&] {
+    const Eigen::MatrixX3f& x = w.positions(g);
+    return double((x.colwise().maxCoeff() - x.colwise().minCoeff()).norm());
+  };
+  const double restDiagonal = diagonal();
+  double top = -1e30;
+  for (const Vec3& p : gooShape.points) top = std::max(top, p.y());
+  std::vector<BodyHandle> pile;
+  for (int k = 0; k < 3; ++k) {
+    BodyDef d = bodyFrom(onFloorAt(bunnyCage(0.06, Vec3(0.02 * k, 0, 0)), top + 0.02 + 0.5 * k),
+                         "heavy " + std::to_string(k), Mode::Rigid, 1.0);
+    d.totalMass = 20;
+    d.params.damping = 0.2;
+    pile.push_back(w.addBody(d));
+  }
+  double largest = 0, lowest = 1e30;
+  for (int step = 0; step < 600; ++step) {  // 10 s
+    w.step();
+    for (const WorldEvent& e : w.takeEvents()) ADD_FAILURE() << e.message;
+    largest = std::max(largest, diagonal() / restDiagonal);
+    for (BodyHandle b : pile) lowest = std::min(lowest, double(w.positions(b).col(1).minCoeff()));
+  }
+  EXPECT_LT(largest, 2.5);
+  EXPECT_GT(lowest, -0.01);  // the floor still holds the pile
+}
+
 // A stiff body dropped on the floor lands as a whole: the floor's impulse on the touching
 // particles reaches its rigid motion, so it does not bounce back up (when only the touching
 // particles were stopped, the rest carried on and the goals turned the projection into an

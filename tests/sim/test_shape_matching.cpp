@@ -2,10 +2,12 @@
 // independently here from the closed forms.
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <random>
 
 #include "sim/world/matching/cluster_layout.h"
 #include "sim/world/matching/cluster_rest.h"
+#include "sim/world/matching/goal_projection.h"
 #include "sim/world/matching/shape_matching.h"
 #include "test_util.h"
 #include "tests/draws.h"
@@ -152,6 +154,44 @@ TEST(ShapeMatching, FlatAndCollinearBodiesGiveFiniteRigidGoals) {
       ASSERT_TRUE(g.allFinite());
       EXPECT_LT(relError(g, x), 1e-5) << modeName(mode);  // a rotated rest shape is its own goal
     }
+}
+
+// The reach: x + α(g − x) when that is within `reach` of g (the same bits as without a reach),
+// else the point at distance `reach` from g on the segment from g towards x + α(g − x).
+TEST(GoalProjection, ReachKeepsParticlesWithinReachOfTheirGoals) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  const int n = 200;
+  std::vector<float> x(n), y(n), z(n);
+  for (int i = 0; i < n; ++i) x[size_t(i)] = u(rng), y[size_t(i)] = u(rng), z[size_t(i)] = u(rng);
+  const std::vector<float> x0 = x, y0 = y, z0 = z;
+  const float g[3] = {0.1f, -0.2f, 0.3f}, alpha = 0.25f, reach = 0.5f;
+  int inside = 0, capped = 0;
+  for (int i = 0; i < n; ++i) {
+    float fx[1] = {x0[size_t(i)]}, fy[1] = {y0[size_t(i)]}, fz[1] = {z0[size_t(i)]};
+    projectParticle(fx, fy, fz, 0, g[0], g[1], g[2], alpha);  // without a reach
+    EXPECT_EQ(projectParticleWithin(x.data(), y.data(), z.data(), i, g[0], g[1], g[2], alpha,
+                                    reach * reach),
+              0);
+    const Eigen::Vector3d free(fx[0], fy[0], fz[0]), got(x[size_t(i)], y[size_t(i)], z[size_t(i)]);
+    const Eigen::Vector3d goal(g[0], g[1], g[2]);
+    if ((free - goal).norm() <= reach) {
+      ++inside;
+      EXPECT_EQ(x[size_t(i)], fx[0]);
+      EXPECT_EQ(y[size_t(i)], fy[0]);
+      EXPECT_EQ(z[size_t(i)], fz[0]);
+    } else {
+      ++capped;
+      EXPECT_NEAR((got - goal).norm(), reach, 1e-6);
+      EXPECT_NEAR((got - goal).normalized().dot((free - goal).normalized()), 1.0, 1e-6);
+    }
+  }
+  EXPECT_GT(inside, 20);
+  EXPECT_GT(capped, 20);
+  // A non-finite position is still reported.
+  x[0] = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_NE(projectParticleWithin(x.data(), y.data(), z.data(), 0, g[0], g[1], g[2], alpha, 0.25f),
+            0);
 }
 
 TEST(ClusterRest, MonomialMapTransformsQuadraticTerms) {

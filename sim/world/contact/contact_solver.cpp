@@ -320,9 +320,10 @@ float currentDistance(std::vector<SolverBody>& bodies, const ContactPoint& c,
 // own deforms the body without velocity: that is elastic energy from nowhere, which shape
 // matching turns into speed at the next sub-step. Under a pile held together by friction these
 // pushes fed energy in every sub-step until the pile blew up (issue 18's soak, seeds 1234 and 7;
-// without local pushes both run 1,500 steps clean; the 20,000-step soak failed later where a
-// very soft body was crushed through itself, docs/design.md §5.5). A whole-body push stores no
-// deformation; it is free work only against gravity, and rate-bounded.
+// without local pushes both run 1,500 steps clean; the 20,000-step soak then failed where a
+// very soft body was crushed through itself, until the reach, docs/design.md §5.3 and §5.5).
+// A whole-body push stores no deformation; it is free work only against gravity, and
+// rate-bounded.
 void pushOut(std::vector<SolverBody>& bodies, const ContactPoint& c, float distance) {
   if (!(distance < 0.0f)) return;
   const Side p = probeSide(bodies, c), o = obstacleSide(bodies, c);

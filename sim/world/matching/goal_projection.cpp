@@ -7,7 +7,7 @@ namespace {
 int projectLinear(float* __restrict px, float* __restrict py, float* __restrict pz,
                   const float* __restrict rx, const float* __restrict ry,
                   const float* __restrict rz, int begin, int end, const GoalTransform& T,
-                  float alpha) {
+                  float alpha, float reach2) {
   const float L00 = T.L(0, 0), L01 = T.L(0, 1), L02 = T.L(0, 2);
   const float L10 = T.L(1, 0), L11 = T.L(1, 1), L12 = T.L(1, 2);
   const float L20 = T.L(2, 0), L21 = T.L(2, 1), L22 = T.L(2, 2);
@@ -18,7 +18,7 @@ int projectLinear(float* __restrict px, float* __restrict py, float* __restrict 
     const float g0 = L00 * x + L01 * y + L02 * z + tx;
     const float g1 = L10 * x + L11 * y + L12 * z + ty;
     const float g2 = L20 * x + L21 * y + L22 * z + tz;
-    bad |= projectParticle(px, py, pz, i, g0, g1, g2, alpha);
+    bad |= projectParticleWithin(px, py, pz, i, g0, g1, g2, alpha, reach2);
   }
   return bad;
 }
@@ -26,7 +26,7 @@ int projectLinear(float* __restrict px, float* __restrict py, float* __restrict 
 int projectQuadratic(float* __restrict px, float* __restrict py, float* __restrict pz,
                      const float* __restrict rx, const float* __restrict ry,
                      const float* __restrict rz, int begin, int end, const GoalTransform& T,
-                     float alpha) {
+                     float alpha, float reach2) {
   float C[3][10];  // per row: L (3), Q (6), t
   for (int a = 0; a < 3; ++a) {
     for (int j = 0; j < 3; ++j) C[a][j] = T.L(a, j);
@@ -41,7 +41,7 @@ int projectQuadratic(float* __restrict px, float* __restrict py, float* __restri
     for (int a = 0; a < 3; ++a)
       g[a] = C[a][0] * x + C[a][1] * y + C[a][2] * z + C[a][3] * xx + C[a][4] * yy + C[a][5] * zz +
              C[a][6] * xy + C[a][7] * yz + C[a][8] * zx + C[a][9];
-    bad |= projectParticle(px, py, pz, i, g[0], g[1], g[2], alpha);
+    bad |= projectParticleWithin(px, py, pz, i, g[0], g[1], g[2], alpha, reach2);
   }
   return bad;
 }
@@ -49,9 +49,10 @@ int projectQuadratic(float* __restrict px, float* __restrict py, float* __restri
 }  // namespace
 
 int projectOntoTransform(const PositionColumns& p, const RestColumns& r, int begin, int end,
-                         const GoalTransform& T, bool quadratic, float alpha) {
-  return quadratic ? projectQuadratic(p.x, p.y, p.z, r.x, r.y, r.z, begin, end, T, alpha)
-                   : projectLinear(p.x, p.y, p.z, r.x, r.y, r.z, begin, end, T, alpha);
+                         const GoalTransform& T, bool quadratic, float alpha, float reach) {
+  const float reach2 = reach * reach;
+  return quadratic ? projectQuadratic(p.x, p.y, p.z, r.x, r.y, r.z, begin, end, T, alpha, reach2)
+                   : projectLinear(p.x, p.y, p.z, r.x, r.y, r.z, begin, end, T, alpha, reach2);
 }
 
 }  // namespace sb

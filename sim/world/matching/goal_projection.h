@@ -4,6 +4,10 @@
 // position appeared (x − x is 0 for finite x and NaN otherwise: an integer OR in the loop).
 #pragma once
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
 #include "sim/world/matching/shape_matching.h"
 
 namespace sb {
@@ -33,6 +37,28 @@ struct RestColumns {
   return ((nx - nx) + (ny - ny) + (nz - nz)) != 0.0f;
 }
 
+// The same, then, where the particle is still farther than `reach` (m, squared: reach2) from
+// its goal, the part beyond is dropped (docs/design.md §5.3, the body's reach): the same bits as
+// projectParticle wherever the particle ends within reach.
+[[gnu::always_inline]] inline int projectParticleWithin(float* __restrict px, float* __restrict py,
+                                                        float* __restrict pz, int i, float g0,
+                                                        float g1, float g2, float alpha,
+                                                        float reach2) {
+  const float nx = px[i] + alpha * (g0 - px[i]);
+  const float ny = py[i] + alpha * (g1 - py[i]);
+  const float nz = pz[i] + alpha * (g2 - pz[i]);
+  const float dx = nx - g0, dy = ny - g1, dz = nz - g2;
+  const float d2 = dx * dx + dy * dy + dz * dz;
+  // Selects, not a branch, so that the loops around stay vectorised (the scale is computed
+  // everywhere and used only beyond the reach, where d2 > reach2 ≥ 0).
+  const bool beyond = d2 > reach2;
+  const float scale = std::sqrt(reach2 / std::max(d2, std::numeric_limits<float>::min()));
+  px[i] = beyond ? g0 + scale * dx : nx;
+  py[i] = beyond ? g1 + scale * dy : ny;
+  pz[i] = beyond ? g2 + scale * dz : nz;
+  return ((nx - nx) + (ny - ny) + (nz - nz)) != 0.0f;
+}
+
 // Particles [begin, end) toward goal(i, g) (g: 3 floats); a goal functor taken by value and
 // restrict pointers keep the loop vectorised.
 template <typename Goal>
@@ -50,8 +76,9 @@ int projectRange(const PositionColumns& p, int begin, int end, float alpha, Goal
 }
 
 // Particles [begin, end) toward one goal transform g = L·r + t (+ Q·mono(r) when quadratic):
-// a body with one cluster, or the whole-body level. Pure streaming.
+// a body with one cluster, or the whole-body level; none ends farther than `reach` (m) from its
+// goal (projectParticleWithin). Pure streaming.
 int projectOntoTransform(const PositionColumns& p, const RestColumns& r, int begin, int end,
-                         const GoalTransform& T, bool quadratic, float alpha);
+                         const GoalTransform& T, bool quadratic, float alpha, float reach);
 
 }  // namespace sb
