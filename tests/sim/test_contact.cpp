@@ -123,6 +123,14 @@ World floorWorld() {
   return world;
 }
 
+// The shape moved up or down so that its lowest point is at `height` (m).
+Shape onFloorAt(Shape s, double height) {
+  double low = 1e30;
+  for (const Vec3& p : s.points) low = std::min(low, p.y());
+  for (Vec3& p : s.points) p.y() += height - low;
+  return s;
+}
+
 Vec3 totalMomentum(const World& w) {
   Vec3 p = Vec3::Zero();
   for (BodyHandle b : w.bodies()) p += w.linearMomentum(b);
@@ -449,12 +457,6 @@ TEST(Contact, VerySoftBodyUnderStifferOnesStaysBounded) {
   WorldSettings awake = w.settings();
   awake.sleep = false;
   w.setSettings(awake);
-  auto onFloorAt = [](Shape s, double height) {  // lowest point at `height`
-    double low = 1e30;
-    for (const Vec3& p : s.points) low = std::min(low, p.y());
-    for (Vec3& p : s.points) p.y() += height - low;
-    return s;
-  };
   BodyDef goo =
       bodyFrom(onFloorAt(bunnyCage(0.07, Vec3::Zero()), 0.01), "goo", Mode::Linear, 0.005);
   goo.params.beta = 0.971;
@@ -499,12 +501,6 @@ TEST(Contact, BodyWithoutStiffnessUnderAPileStaysWithinItsReach) {
   WorldSettings awake = w.settings();
   awake.sleep = false;
   w.setSettings(awake);
-  auto onFloorAt = [](Shape s, double height) {  // lowest point at `height`
-    double low = 1e30;
-    for (const Vec3& p : s.points) low = std::min(low, p.y());
-    for (Vec3& p : s.points) p.y() += height - low;
-    return s;
-  };
   const Shape gooShape = onFloorAt(bunnyCage(0.07, Vec3::Zero()), 0.01);
   BodyDef goo = bodyFrom(gooShape, "goo", Mode::Linear, 0.0);
   goo.params.beta = 0.97;
