@@ -80,8 +80,9 @@ struct SolverBody {
 // gathered corrections.
 void prepareSolverBody(SolverBody& body);
 
-// Applies the gathered rigid corrections about the centre of mass as it is now (after the
-// particle shares moved it): x = c + shift + R(turn)(x − c), v += deltaV + deltaW × (x − c).
+// Applies the gathered rigid corrections about the centre of mass c as it is now (after the
+// particle shares moved it): x = c + shift + R(turn)(x − c), and the velocities turn with the
+// body, v ← v + (R − I)(v − vc) + deltaV + deltaW × R(x − c) (vc the centre's velocity).
 void finishSolverBody(SolverBody& body);
 
 // The particle's position including the gathered rigid corrections (metres).
