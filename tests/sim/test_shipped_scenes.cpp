@@ -65,7 +65,7 @@ struct RunLength {
 RunLength runLengthOf(const std::string& name) {
   static const std::map<std::string, RunLength> special = {
       {"default", {12.0, true}},      // (10.7 s)
-      {"plasticity", {8.0, true}},    // (asleep at 7.6 s)
+      {"plasticity", {8.0, true}},    // (asleep at 7.8 s)
       {"clusters", {10.0, true}},     // (7.7 s)
       {"restitution", {10.0, true}},  // (8.3 s: the e = 0.9 box bounces until then)
       {"slope", {10.0, true}},        // (1.9 s: the 40° box has slid onto the floor)
