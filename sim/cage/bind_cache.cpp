@@ -305,7 +305,8 @@ Embedding Embedding::fromBytes(const std::string& data, const std::string& path,
     if (rd.pos + need != body.size())
       throw std::runtime_error(path + ": size does not match the header");
     DenseD W(rows, cols);
-    std::memcpy(W.data(), body.data() + rd.pos, need);
+    // A mesh without vertices has no storage (data() is null, which memcpy may not be given).
+    if (need != 0) std::memcpy(W.data(), body.data() + rd.pos, need);
     if (!W.allFinite()) throw std::runtime_error(path + ": non-finite weight");
     e = fromDense(std::move(W));
   }
