@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "sim/base/parallel.h"
+#include "sim/world/contact/contact_solver.h"
 #include "test_util.h"
 
 namespace sb {
@@ -314,7 +315,9 @@ TEST(Colliders, EachTypeStopsAFallingBody) {
         lowest = std::min(lowest, colliderDistance(c, x.row(i).transpose(), &n));
       }
     }
-    EXPECT_GT(lowest, -1e-4) << colliderShapeName(c.shape);  // never inside after a step
+    // Never inside after a step deeper than the contact slop (this body has no surface), with
+    // 10 µm for round-off.
+    EXPECT_GT(lowest, -kContactSlop * kSpacingWithoutSurface - 1e-5) << colliderShapeName(c.shape);
     EXPECT_GT(world.centreOfMass(b).y(), 0.0) << colliderShapeName(c.shape);  // resting on top
     // The fall (≈ 6 m/s at impact) has been stopped.
     EXPECT_LT(std::abs(world.linearMomentum(b).y()), 0.1 * world.mass(b))
@@ -415,7 +418,7 @@ TEST(Determinism, BitIdenticalAcrossRunsAndThreadCounts) {
   EXPECT_EQ(one, two);
   // Golden value: changes only when the simulation's arithmetic changes on purpose. The same
   // with GCC and clang (the scene's jittered grid is drawn in a fixed order: tests/draws.h).
-  EXPECT_EQ(one, 0xedfb1237bbe78652ULL) << std::hex << one;
+  EXPECT_EQ(one, 0xdaf3f6d57319d09fULL) << std::hex << one;
 }
 
 }  // namespace
