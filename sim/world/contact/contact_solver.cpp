@@ -325,15 +325,11 @@ float currentDistance(std::vector<SolverBody>& bodies, const ContactPoint& c,
 // A whole-body push stores no deformation; it is free work only against gravity, and
 // rate-bounded.
 //
-// Only what is deeper than the slop (kContactSlop spacings) is pushed, and only the excess.
-// Resting contacts end each velocity solve a little inside (round-off and the sweeps' residue:
-// ~0.1 µm per contact in a resting stack of boxes), and each such push turns the body about its
-// centre of mass, which slides its other contacts sideways with no friction to hold them. The
-// slide has a direction set by the mesh, not by the sweep order (the same with the contacts
-// swept in reverse), so it added up: a stack of ten 0.4 m boxes, sleep off, walked 1–8 cm per
-// 20 s, and one whose boxes are each turned 7° from the one below fell over within 10 s, with
-// sleep on as well. Within the slop a contact stays as it is: its velocity target keeps it from
-// going deeper.
+// Only what is deeper than the slop (kContactSlop spacings) is pushed, and only the excess:
+// resting contacts end each velocity solve a little inside (round-off), and each push turns the
+// body about its centre of mass, sliding its other contacts sideways with nothing to hold them;
+// pushed every sub-step, that made stacks walk and tall ones fall (docs/design.md §5.5). Within
+// the slop a contact stays as it is: its velocity target keeps it from going deeper.
 void pushOut(std::vector<SolverBody>& bodies, const ContactPoint& c, float distance) {
   const Side p = probeSide(bodies, c), o = obstacleSide(bodies, c);
   const float spacing = p.body->spacing > 0.0f ? p.body->spacing : kSpacingWithoutSurface;

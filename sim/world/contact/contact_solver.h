@@ -39,10 +39,8 @@
 namespace sb {
 
 // Penetration left alone by the position recovery, in spacings of the probe body (0.2 mm for a
-// 0.1 m spacing): resting contacts may stay this deep. Pushing out every round-off residue
-// turned resting bodies a little each sub-step and made stacks walk (contact_solver.cpp,
-// pushOut). (0.5 % let a stack of five rigid-mode α 0.5 boxes, sleep off, sway and fall at 32 s;
-// 0.2 % keeps every stack measured within 1.5 mm per 20 s.)
+// 0.1 m spacing): resting contacts may stay this deep. Why, and why this value: docs/design.md
+// §5.5 (the slop).
 inline constexpr float kContactSlop = 0.002f;
 // Metres: the spacing used for a body without a surface (particles only, e.g. against colliders).
 inline constexpr float kSpacingWithoutSurface = 0.05f;
