@@ -232,8 +232,9 @@ void ViewerApp::drawBodyPanel(int body) {
                      "(pinned bodies: the motion their pins allow, so a swing comes to rest).");
     changed |= sliderDouble("restitution", &p.restitution, 0.0f, 1.0f, "%.2f",
                             "Share of the approach speed an impact gives back (0 = no bounce);\n"
-                            "a contact uses the larger of its two sides'. Rigid bodies rebound\n"
-                            "e^2 of their fall height; soft bodies do not follow it yet.");
+                            "a contact uses the larger of its two sides'. Impacts faster than the\n"
+                            "threshold (1 m/s) rebound e^2 of the fall height, soft bodies too\n"
+                            "(their impact is one event of the two bodies as a whole).");
     changed |= sliderDouble("c_yield", &p.plasticity.yield, 0.0f, 1.0f, "%.3f",
                             "Plastic yield: stretch ||S - I|| above which the rest shape creeps.");
     changed |= sliderDouble("c_creep", &p.plasticity.creep, 0.0f, 20.0f, "%.2f",

@@ -70,10 +70,10 @@ struct BodyParams {
   // Restitution e in [0, 1]: the normal speed a contact gives back, relative to the approach,
   // for impacts faster than WorldSettings::restitutionThreshold. A contact uses the larger of
   // its two sides' (the other body's or the collider's), as Box2D. 0: impacts are inelastic.
-  // Rigid bodies rebound e² of their fall height (± 0.03); soft bodies (α < 1) do not follow e
-  // yet: the bounce acts on the touching particles, which shape matching pulls back, and part
-  // of the deformation stored on impact springs back whatever e is (a linear α 0.6 body
-  // rebounds 0.05 of its fall for e = 0, 0.02 for e = 0.5; docs/design.md §5.5).
+  // Bodies rebound e² of their fall height: rigid ones (α = 1) contact by contact (± 0.03), soft
+  // ones (α < 1) as a whole, the pair's centres parting with e times their approach speed and
+  // the deformation stored on impact held back from springing off faster (α 0.3–0.9: e² ± 0.05;
+  // softer bodies start their rebound lower, from their compression depth; soft_impact.h).
   double restitution = 0.0;
   PlasticityParams plasticity;
 };

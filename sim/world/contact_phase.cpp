@@ -5,6 +5,7 @@
 
 #include "sim/base/parallel_for.h"
 #include "sim/base/union_find.h"
+#include "sim/world/mass_properties.h"
 
 namespace sb {
 
@@ -70,6 +71,153 @@ void prepareBody(BodySlot& b, SolverBody& sb) {
   sb.recoveryShare = m.pinned.empty() ? 1.0f : 0.0f;
   sb.immovable = b.sleep.asleep;
   prepareSolverBody(sb);
+}
+
+// A body whose impacts are events of the pair as a whole (soft_impact.h): soft (α < 1) and free
+// to move as a whole (no pinned particles).
+bool impactsAsAWhole(const BodySlot& b) {
+  return b.params.alpha < 1.0 && b.model->pinned.empty();
+}
+
+bool lessImpactKey(const ContactScratch::SoftPair& a, const ContactScratch::SoftPair& b) {
+  return a.key < b.key;
+}
+
+// Adds one contact of a pair that involves a soft body: n out of the obstacle, which is the
+// pair's b when `flip` is false.
+void addSoftContact(std::vector<ContactScratch::SoftPair>& pairs, const std::array<int, 2>& key,
+                    const Vec3f& n, bool flip, float restitution, bool inside) {
+  if (pairs.empty() || pairs.back().key != key)
+    pairs.push_back({key, Vec3f::Zero(), restitution, false, 0.0f});
+  pairs.back().normal += flip ? Vec3f(-n) : n;
+  pairs.back().meets = pairs.back().meets || inside;
+}
+
+// Sorts the touching soft pairs, merges the two directions of a body pair, makes the normals
+// unit and takes the centres' relative normal velocity before the solve.
+void prepareSoftPairs(std::vector<ContactScratch::SoftPair>& pairs,
+                      const std::vector<SolverBody>& bodies, const std::vector<int>& solverIndex) {
+  std::stable_sort(pairs.begin(), pairs.end(), lessImpactKey);
+  size_t kept = 0;
+  for (size_t k = 0; k < pairs.size(); ++k) {
+    if (kept > 0 && pairs[kept - 1].key == pairs[k].key) {
+      pairs[kept - 1].normal += pairs[k].normal;
+      pairs[kept - 1].meets = pairs[kept - 1].meets || pairs[k].meets;
+      continue;
+    }
+    pairs[kept++] = pairs[k];
+  }
+  pairs.resize(kept);
+  auto velocityOf = [&](int slot) {
+    if (slot < 0) return Vec3f(Vec3f::Zero());  // colliders are static
+    const SolverBody& b = bodies[size_t(solverIndex[size_t(slot)])];
+    return b.immovable ? Vec3f(Vec3f::Zero()) : b.fitV;
+  };
+  for (ContactScratch::SoftPair& p : pairs) {
+    const float length = p.normal.norm();
+    p.normal = length > 0.0f ? Vec3f(p.normal / length) : Vec3f::Zero();
+    p.before = (velocityOf(p.key[0]) - velocityOf(p.key[1])).dot(p.normal);
+  }
+}
+
+// After the solve: starts, advances and ends the impacts of the touching soft pairs (an impact
+// whose pair stopped touching is over) and gives each body the velocity change. A change that
+// separates the pair moves the positions with it (x += h·Δv, as in the solve); one that holds
+// the pair together (the cap of the release) changes only the velocities and acts from the
+// next sub-step on, whose contacts still stop the particles it moves towards the obstacle
+// (moving the positions at once pushed the touching particles of a body held after landing up
+// to 3 mm into the floor).
+void runSoftImpacts(ContactScratch& scratch, std::vector<SolverBody>& bodies,
+                    const std::vector<BodySlot>& slots, float h, float threshold) {
+  std::vector<SoftImpact>& next = scratch.impactsNext;
+  next.clear();
+  if (scratch.softPairs.empty()) {
+    std::swap(scratch.impacts, next);
+    return;
+  }
+  // Per solver body: the centre's velocity (computed when first needed, for bodies in an
+  // impact), and the velocity change and shift the impacts give it.
+  const int nb = static_cast<int>(bodies.size());
+  std::vector<Vec3f>& centreVelocity = scratch.impactVelocity;
+  std::vector<Vec3f>& change = scratch.impactChange;
+  std::vector<Vec3f>& shift = scratch.impactShift;
+  std::vector<char>& known = scratch.impactKnown;
+  centreVelocity.assign(size_t(nb), Vec3f::Zero());
+  change.assign(size_t(nb), Vec3f::Zero());
+  shift.assign(size_t(nb), Vec3f::Zero());
+  known.assign(size_t(nb), 0);
+  auto side = [&](int slot, Vec3f& velocity, float& invMass) -> int {
+    velocity.setZero();
+    invMass = 0;
+    if (slot < 0) return -1;
+    const int b = scratch.solverIndex[size_t(slot)];
+    const SolverBody& body = bodies[size_t(b)];
+    if (body.immovable) return -1;
+    if (!known[size_t(b)]) {
+      known[size_t(b)] = 1;
+      centreVelocity[size_t(b)] =
+          centreOfMass(PointColumns{{body.v[0], body.v[1], body.v[2]}}, body.mass, body.count)
+              .cast<float>();
+    }
+    velocity = centreVelocity[size_t(b)] + change[size_t(b)];
+    // A body held by pinned particles answers as immovable.
+    invMass = slots[size_t(slot)].model->pinned.empty() ? body.invTotalMass : 0.0f;
+    return b;
+  };
+  size_t old = 0;
+  for (const ContactScratch::SoftPair& p : scratch.softPairs) {
+    while (old < scratch.impacts.size() && scratch.impacts[old].key < p.key) ++old;
+    SoftImpact impact;
+    if (old < scratch.impacts.size() && scratch.impacts[old].key == p.key) {
+      impact = scratch.impacts[old];
+      // Until the surfaces meet, u₀ is the fastest approach seen (gravity may still speed the
+      // pair up; the speculative contacts only slow it within the solve).
+      if (!impact.met) impact.approach = std::max(impact.approach, -p.before);
+    } else {
+      // An impact starts where the pair comes within reach while the centres approach fast
+      // enough.
+      if (!(-p.before > threshold) || p.normal.isZero()) continue;
+      impact.key = p.key;
+      impact.normal = p.normal;
+      impact.approach = -p.before;
+      impact.restitution = p.restitution;
+      double alpha = 1.0;
+      for (int slot : p.key)
+        if (slot >= 0) alpha = std::min(alpha, slots[size_t(slot)].params.alpha);
+      impact.relaxing = relaxSubsteps(alpha);
+    }
+    Vec3f va, vb;
+    float wa, wb;
+    const int a = side(impact.key[0], va, wa), b = side(impact.key[1], vb, wb);
+    bool alive = false;
+    const float dv = advanceSoftImpact(impact, (va - vb).dot(impact.normal), p.meets, alive);
+    if (!alive) continue;
+    next.push_back(impact);
+    if (dv == 0.0f || !(wa + wb > 0.0f)) continue;
+    const float impulse = dv / (wa + wb);         // N·s along n, on a (−impulse on b)
+    const float moved = dv > 0.0f ? 1.0f : 0.0f;  // separating: the positions follow
+    if (a >= 0) {
+      change[size_t(a)] += (impulse * wa) * impact.normal;
+      shift[size_t(a)] += (moved * impulse * wa) * impact.normal;
+    }
+    if (b >= 0) {
+      change[size_t(b)] -= (impulse * wb) * impact.normal;
+      shift[size_t(b)] -= (moved * impulse * wb) * impact.normal;
+    }
+  }
+  std::swap(scratch.impacts, next);
+  for (int b = 0; b < nb; ++b) {
+    if (change[size_t(b)].isZero()) continue;
+    SolverBody& body = bodies[size_t(b)];
+    const Vec3f dv = change[size_t(b)], dx = h * shift[size_t(b)];
+    for (int i = 0; i < body.count; ++i) {
+      if (body.invMass[i] == 0.0f) continue;  // pinned
+      for (int k = 0; k < 3; ++k) {
+        body.v[k][i] += dv[k];
+        body.x[k][i] += dx[k];
+      }
+    }
+  }
 }
 
 }  // namespace
@@ -299,6 +447,7 @@ int runSolvePhase(const WorkLayout& layout, const ContactSettings& settings, dou
     }
   if (solverSlot.empty()) {
     scratch.warm.clear();
+    scratch.impacts.clear();  // nothing touches: every impact is over
     return 0;
   }
   bodies.resize(solverSlot.size());
@@ -310,12 +459,18 @@ int runSolvePhase(const WorkLayout& layout, const ContactSettings& settings, dou
   // larger of the two sides' (as Box2D), friction the body–body or the collider's.
   std::vector<ContactPoint>& points = scratch.points;
   points.clear();
+  std::vector<ContactScratch::SoftPair>& softPairs = scratch.softPairs;
+  softPairs.clear();
   for (size_t k = 0; k < contactPairs.size(); ++k) {
     const ContactScratch::Pair& pair = contactPairs[k];
     const BodySlot& probe = slots[size_t(pair.probe)];
     const BodySlot& obstacle = slots[size_t(pair.obstacle)];
     const float gap = kContactGap * obstacle.model->spacing;
     const float e = float(std::max(probe.params.restitution, obstacle.params.restitution));
+    // A pair with a soft body bounces as a whole (soft_impact.h); its contacts are inelastic.
+    const bool soft = impactsAsAWhole(probe) || impactsAsAWhole(obstacle);
+    const std::array<int, 2> key{std::min(pair.probe, pair.obstacle),
+                                 std::max(pair.probe, pair.obstacle)};
     for (const Contact& c : scratch.pairContacts[k]) {
       ContactPoint cp;
       cp.probe = solverIndex[size_t(pair.probe)];
@@ -326,8 +481,10 @@ int runSolvePhase(const WorkLayout& layout, const ContactSettings& settings, dou
       cp.normal = c.normal;
       cp.distance0 = c.distance - gap;
       cp.friction = settings.friction;
-      cp.restitution = e;
+      cp.restitution = soft ? 0.0f : e;
       points.push_back(cp);
+      if (soft)
+        addSoftContact(softPairs, key, c.normal, key[0] != pair.probe, e, cp.distance0 < 0.0f);
     }
   }
   for (int s : order)
@@ -340,8 +497,13 @@ int runSolvePhase(const WorkLayout& layout, const ContactSettings& settings, dou
       cp.normal = hit.normal;
       cp.distance0 = hit.distance;
       cp.friction = float(collider.friction);
-      cp.restitution = float(std::max(collider.restitution, slots[size_t(s)].params.restitution));
+      const float e = float(std::max(collider.restitution, slots[size_t(s)].params.restitution));
+      const bool soft = impactsAsAWhole(slots[size_t(s)]);
+      cp.restitution = soft ? 0.0f : e;
       points.push_back(cp);
+      if (soft)
+        addSoftContact(softPairs, {s, -1 - hit.collider}, hit.normal, false, e,
+                       cp.distance0 < 0.0f);
     }
 
   // Warm start: the impulses each contact carried at the last sub-step.
@@ -402,6 +564,7 @@ int runSolvePhase(const WorkLayout& layout, const ContactSettings& settings, dou
   solver.up = settings.gravity.squaredNorm() > 0.0
                   ? Vec3f((-settings.gravity.normalized()).cast<float>())
                   : Vec3f::Zero();
+  prepareSoftPairs(softPairs, bodies, solverIndex);
   parallelFor(islands, minParallel, [&](int i) {
     solveIsland(bodies, points, scratch.islandBodies[size_t(i)], scratch.islandPoints[size_t(i)],
                 colliders, solver);
@@ -409,6 +572,7 @@ int runSolvePhase(const WorkLayout& layout, const ContactSettings& settings, dou
   parallelFor(nb, minParallel, [&](int b) {
     if (!bodies[size_t(b)].immovable) finishSolverBody(bodies[size_t(b)]);
   });
+  runSoftImpacts(scratch, bodies, slots, float(h), settings.restitutionThreshold);
 
   // Keep the impulses for the next sub-step; report the pairs that touched and the contacts
   // that carried load.

@@ -12,7 +12,8 @@
 // Solve — every contact of the sub-step, body–body and static, in one solve (contact_solver.h),
 //   per island of touching bodies (islands share no body, so they run in parallel, each in a
 //   fixed order: the result does not depend on the thread count); the impulses warm start the
-//   next sub-step. Sleeping bodies do not move.
+//   next sub-step. Sleeping bodies do not move. Then the impacts of pairs with a soft body
+//   (soft_impact.h), which are kept from sub-step to sub-step like the impulses.
 //   Reads: x, v, models, params (α, restitution), settings, colliders. Writes: x, v.
 #pragma once
 
@@ -26,6 +27,7 @@
 #include "sim/world/collider.h"
 #include "sim/world/contact/body_contact.h"
 #include "sim/world/contact/contact_solver.h"
+#include "sim/world/contact/soft_impact.h"
 #include "sim/world/contact/surface_grid.h"
 #include "sim/world/work_layout.h"
 
@@ -100,6 +102,29 @@ struct ContactScratch {
   // islands) and the number of body–body contacts that carried load.
   std::vector<std::pair<int, int>> touching;
   int activeContacts = 0;
+
+  // Restitution of pairs that involve a soft body (soft_impact.h): the pairs touching this
+  // sub-step, keyed as SoftImpact::key, and the impacts in progress (both sorted by key).
+  struct SoftPair {
+    std::array<int, 2> key;
+    Vec3f normal;       // sum of the contacts' normals, from b toward a
+    float restitution;  // e, the largest of the two sides'
+    bool meets;         // some particle is inside after the integration: the surfaces meet
+    float before;       // relative normal velocity of the centres before the solve, m/s
+  };
+  std::vector<SoftPair> softPairs;
+  std::vector<SoftImpact> impacts, impactsNext;
+  // Per solver body while the impacts run: centre velocity, velocity change, shift, and
+  // whether the centre velocity is known.
+  std::vector<Vec3f> impactVelocity, impactChange, impactShift;
+  std::vector<char> impactKnown;
+
+  // What is kept between sub-steps and keyed by slot (warm starts, impacts): forgotten when
+  // bodies are added, removed or reset, since a reused slot is another body.
+  void forgetBodies() {
+    warm.clear();
+    impacts.clear();
+  }
 };
 
 // Detection. `order`: every alive slot in creation order; sleeping bodies have

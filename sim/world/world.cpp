@@ -312,7 +312,7 @@ BodyHandle World::addBody(const BodyDef& def) {
   d_->slots[index] = std::move(slot);
   d_->order.push_back(static_cast<int>(index));
   d_->awakeDirty = true;
-  d_->contactScratch.warm.clear();  // keyed by slot: a reused slot is another body
+  d_->contactScratch.forgetBodies();
   return d_->handleOf(static_cast<int>(index));
 }
 
@@ -326,7 +326,7 @@ void World::removeBody(BodyHandle h) {
   s.state = BodyState{};
   d_->order.erase(std::find(d_->order.begin(), d_->order.end(), int(h.index)));
   d_->awakeDirty = true;
-  d_->contactScratch.warm.clear();
+  d_->contactScratch.forgetBodies();
   auto& wakes = d_->contactScratch.wake;
   wakes.erase(std::remove(wakes.begin(), wakes.end(), int(h.index)), wakes.end());
   for (auto it = d_->drags.begin(); it != d_->drags.end();)
@@ -526,7 +526,7 @@ void World::reset() {
     b.sleep = SleepState{};
   }
   d_->awakeDirty = true;
-  d_->contactScratch.warm.clear();
+  d_->contactScratch.forgetBodies();
   d_->contactScratch.wake.clear();
   d_->drags.clear();
   d_->forces.clear();
