@@ -4,6 +4,9 @@ namespace sb {
 
 namespace {
 
+// Both loops are vectorised (`omp simd`, and -fno-trapping-math for this file, see
+// CMakeLists.txt); scalar, they cost ~10 ns per particle of a 10⁶-particle body (issue 17).
+// Lane-wise IEEE operations, and the flag an integer OR: the same bits as the scalar loop.
 int projectLinear(float* __restrict px, float* __restrict py, float* __restrict pz,
                   const float* __restrict rx, const float* __restrict ry,
                   const float* __restrict rz, int begin, int end, const GoalTransform& T,
@@ -13,6 +16,7 @@ int projectLinear(float* __restrict px, float* __restrict py, float* __restrict 
   const float L20 = T.L(2, 0), L21 = T.L(2, 1), L22 = T.L(2, 2);
   const float tx = T.t.x(), ty = T.t.y(), tz = T.t.z();
   int bad = 0;
+#pragma omp simd reduction(| : bad)
   for (int i = begin; i < end; ++i) {
     const float x = rx[i], y = ry[i], z = rz[i];
     const float g0 = L00 * x + L01 * y + L02 * z + tx;
@@ -34,6 +38,7 @@ int projectQuadratic(float* __restrict px, float* __restrict py, float* __restri
     C[a][9] = T.t[a];
   }
   int bad = 0;
+#pragma omp simd reduction(| : bad)
   for (int i = begin; i < end; ++i) {
     const float x = rx[i], y = ry[i], z = rz[i];
     const float xx = x * x, yy = y * y, zz = z * z, xy = x * y, yz = y * z, zx = z * x;
