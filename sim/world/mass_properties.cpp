@@ -61,8 +61,12 @@ RigidSums rigidBlockSums(const PointColumns& x, const PointColumns& v, const flo
     acc[15][l] += wi * (dx * uy - dy * ux);
   };
   int i = b0;
-  for (; i + kLanes <= b1; i += kLanes)
+  for (; i + kLanes <= b1; i += kLanes) {
+    // The lanes as one vector (without `omp simd` GCC 12 left this loop scalar, issue 17):
+    // lane-wise IEEE operations, the same bits.
+#pragma omp simd
     for (int l = 0; l < kLanes; ++l) add(i + l, l);
+  }
   for (; i < b1; ++i) add(i, 0);
   RigidSums t;
   for (int k = 0; k < 16; ++k) {
