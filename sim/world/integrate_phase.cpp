@@ -128,6 +128,61 @@ void forParticleRanges(int count, const Body& body) {
   parallelRanges(count, kMinParallelParticles, 1 << 30, body);
 }
 
+// The prediction of particles [begin, end) of one body: x̂ = x + h·v + D·(x − xc) + fall and
+// v̂ = v + T·(v − vc), with D = R − I − h·[ω]× and T = R − I; x takes x̂ too.
+struct PredictStep {
+  Eigen::Matrix3f D, T;
+  Eigen::Vector3f xc, vc, fall;
+  float h;
+};
+
+// One vectorised loop (`omp simd`: GCC 12 does not take the local restricts as proof that the
+// twelve columns do not overlap and gave up), every 3×3 product spelled out the way Eigen sums a
+// fixed-size one, m₀d₀ + (m₁d₁ + m₂d₂): the bits are those of the per-particle Eigen::Vector3f
+// expressions this replaced, which ran scalar (issue 17).
+void predictRange(const PredictStep& c, const std::array<float*, 3>& x,
+                  const std::array<float*, 3>& xPred, const std::array<float*, 3>& v,
+                  const std::array<float*, 3>& vPred, int begin, int end) {
+  float* __restrict x0 = x[0];
+  float* __restrict x1 = x[1];
+  float* __restrict x2 = x[2];
+  float* __restrict xp0 = xPred[0];
+  float* __restrict xp1 = xPred[1];
+  float* __restrict xp2 = xPred[2];
+  const float* __restrict v0 = v[0];
+  const float* __restrict v1 = v[1];
+  const float* __restrict v2 = v[2];
+  float* __restrict vp0 = vPred[0];
+  float* __restrict vp1 = vPred[1];
+  float* __restrict vp2 = vPred[2];
+  const float D00 = c.D(0, 0), D01 = c.D(0, 1), D02 = c.D(0, 2);
+  const float D10 = c.D(1, 0), D11 = c.D(1, 1), D12 = c.D(1, 2);
+  const float D20 = c.D(2, 0), D21 = c.D(2, 1), D22 = c.D(2, 2);
+  const float T00 = c.T(0, 0), T01 = c.T(0, 1), T02 = c.T(0, 2);
+  const float T10 = c.T(1, 0), T11 = c.T(1, 1), T12 = c.T(1, 2);
+  const float T20 = c.T(2, 0), T21 = c.T(2, 1), T22 = c.T(2, 2);
+  const float cx = c.xc.x(), cy = c.xc.y(), cz = c.xc.z();
+  const float ux = c.vc.x(), uy = c.vc.y(), uz = c.vc.z();
+  const float fx = c.fall.x(), fy = c.fall.y(), fz = c.fall.z();
+  const float h = c.h;
+#pragma omp simd
+  for (int i = begin; i < end; ++i) {
+    const float px = x0[i], py = x1[i], pz = x2[i];
+    const float qx = v0[i], qy = v1[i], qz = v2[i];
+    const float dx = px - cx, dy = py - cy, dz = pz - cz;
+    const float ex = qx - ux, ey = qy - uy, ez = qz - uz;
+    const float mx = ((px + h * qx) + (D00 * dx + (D01 * dy + D02 * dz))) + fx;
+    const float my = ((py + h * qy) + (D10 * dx + (D11 * dy + D12 * dz))) + fy;
+    const float mz = ((pz + h * qz) + (D20 * dx + (D21 * dy + D22 * dz))) + fz;
+    x0[i] = xp0[i] = mx;
+    x1[i] = xp1[i] = my;
+    x2[i] = xp2[i] = mz;
+    vp0[i] = qx + (T00 * ex + (T01 * ey + T02 * ez));
+    vp1[i] = qy + (T10 * ex + (T11 * ey + T12 * ez));
+    vp2[i] = qz + (T20 * ex + (T21 * ey + T22 * ez));
+  }
+}
+
 // The weights a body's rigid motion is fitted with: masses, pinned particles immovable.
 const float* rigidWeights(const BodyModel& m) {
   return m.pinned.empty() ? m.mass.data() : m.bodyWeight.data();
@@ -163,22 +218,14 @@ void runPredictPhase(const WorkLayout& layout, const Vec3& gravity, double h,
           turnVelocity = RmI.cast<float>();
           toRotation = turnVelocity - hf * skew(rm.omega.cast<float>());
         }
-        const Eigen::Vector3f xc = rm.centre.cast<float>(), vc = rm.velocity.cast<float>();
+        const PredictStep step{
+            toRotation, turnVelocity, rm.centre.cast<float>(), rm.velocity.cast<float>(), fall, hf};
         s.vPred.resize(n, 3);
         s.xPred.resize(n, 3);
         const std::array<float*, 3> x = writableColumns(s.x), xp = writableColumns(s.xPred),
                                     v = writableColumns(s.v), vp = writableColumns(s.vPred);
-        forParticleRanges(n, [&](int begin, int end) {
-          for (int i = begin; i < end; ++i) {
-            const Eigen::Vector3f xi(x[0][i], x[1][i], x[2][i]), vi(v[0][i], v[1][i], v[2][i]);
-            const Eigen::Vector3f moved = xi + hf * vi + toRotation * (xi - xc) + fall;
-            const Eigen::Vector3f turned = vi + turnVelocity * (vi - vc);
-            for (int a = 0; a < 3; ++a) {
-              x[a][i] = xp[a][i] = moved[a];
-              vp[a][i] = turned[a];
-            }
-          }
-        });
+        forParticleRanges(
+            n, [&](int begin, int end) { predictRange(step, x, xp, v, vp, begin, end); });
         for (int p : m.pinned) s.x.row(p) = s.xPred.row(p) = m.startPositions.row(p);
       });
 }
