@@ -183,6 +183,30 @@ void predictRange(const PredictStep& c, const std::array<float*, 3>& x,
   }
 }
 
+// v += K·(x − xc) − shift for particles [begin, end): one vectorised loop, the product summed in
+// Eigen's order as in predictRange (same bits as the Eigen::Vector3f form it replaced).
+void addTurn(const Eigen::Matrix3f& K, const Eigen::Vector3f& xc, const Eigen::Vector3f& shift,
+             const std::array<float*, 3>& x, const std::array<float*, 3>& v, int begin, int end) {
+  const float* __restrict x0 = x[0];
+  const float* __restrict x1 = x[1];
+  const float* __restrict x2 = x[2];
+  float* __restrict v0 = v[0];
+  float* __restrict v1 = v[1];
+  float* __restrict v2 = v[2];
+  const float K00 = K(0, 0), K01 = K(0, 1), K02 = K(0, 2);
+  const float K10 = K(1, 0), K11 = K(1, 1), K12 = K(1, 2);
+  const float K20 = K(2, 0), K21 = K(2, 1), K22 = K(2, 2);
+  const float cx = xc.x(), cy = xc.y(), cz = xc.z();
+  const float sx = shift.x(), sy = shift.y(), sz = shift.z();
+#pragma omp simd
+  for (int i = begin; i < end; ++i) {
+    const float dx = x0[i] - cx, dy = x1[i] - cy, dz = x2[i] - cz;
+    v0[i] += (K00 * dx + (K01 * dy + K02 * dz)) - sx;
+    v1[i] += (K10 * dx + (K11 * dy + K12 * dz)) - sy;
+    v2[i] += (K20 * dx + (K21 * dy + K22 * dz)) - sz;
+  }
+}
+
 // The weights a body's rigid motion is fitted with: masses, pinned particles immovable.
 const float* rigidWeights(const BodyModel& m) {
   return m.pinned.empty() ? m.mass.data() : m.bodyWeight.data();
@@ -320,14 +344,8 @@ void runVelocitiesPhase(const WorkLayout& layout, const Vec3& gravity, double h,
                 Vec3 sum = Vec3::Zero();
                 for (const Vec3& blockSum : blockSums) sum += blockSum;
                 const Eigen::Vector3f shift = dw.cross((sum / m.totalMass).cast<float>());
-                const Eigen::Matrix3f K = skew(dw);
-                forParticleRanges(n, [&](int begin, int end) {
-                  for (int i = begin; i < end; ++i) {
-                    const Eigen::Vector3f xi(x[0][i], x[1][i], x[2][i]);
-                    const Eigen::Vector3f dv = K * (xi - xc) - shift;
-                    for (int a = 0; a < 3; ++a) v[a][i] += dv[a];
-                  }
-                });
+                forParticleRanges(
+                    n, [&](int begin, int end) { addTurn(skew(dw), xc, shift, x, v, begin, end); });
               });
 }
 
