@@ -6,11 +6,22 @@ namespace {
 
 // Both loops are vectorised (`omp simd`, and -fno-trapping-math for this file, see
 // CMakeLists.txt); scalar, they cost ~10 ns per particle of a 10⁶-particle body (issue 17).
-// Lane-wise IEEE operations, and the flag an integer OR: the same bits as the scalar loop.
-int projectLinear(float* __restrict px, float* __restrict py, float* __restrict pz,
-                  const float* __restrict rx, const float* __restrict ry,
-                  const float* __restrict rz, int begin, int end, const GoalTransform& T,
-                  float alpha, float reach2) {
+// Compiled for x86-64-v3 (AVX2: eight lanes per operation, the goal's and the reach's arithmetic
+// is what bounds these loops) and the baseline; the loader picks by CPU. Lane-wise IEEE
+// operations, no FMA, and the flag an integer OR: the same bits on either target and as a
+// scalar loop (tests/sim/test_projection_targets.cpp builds the baseline alone with
+// SB_GOAL_PROJECTION_BASELINE and compares).
+#ifndef SB_GOAL_PROJECTION_BASELINE
+#define SB_PROJECTION_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
+#else
+#define SB_PROJECTION_CLONES
+#endif
+
+SB_PROJECTION_CLONES int projectLinear(float* __restrict px, float* __restrict py,
+                                       float* __restrict pz, const float* __restrict rx,
+                                       const float* __restrict ry, const float* __restrict rz,
+                                       int begin, int end, const GoalTransform& T, float alpha,
+                                       float reach2) {
   const float L00 = T.L(0, 0), L01 = T.L(0, 1), L02 = T.L(0, 2);
   const float L10 = T.L(1, 0), L11 = T.L(1, 1), L12 = T.L(1, 2);
   const float L20 = T.L(2, 0), L21 = T.L(2, 1), L22 = T.L(2, 2);
@@ -27,10 +38,11 @@ int projectLinear(float* __restrict px, float* __restrict py, float* __restrict 
   return bad;
 }
 
-int projectQuadratic(float* __restrict px, float* __restrict py, float* __restrict pz,
-                     const float* __restrict rx, const float* __restrict ry,
-                     const float* __restrict rz, int begin, int end, const GoalTransform& T,
-                     float alpha, float reach2) {
+SB_PROJECTION_CLONES int projectQuadratic(float* __restrict px, float* __restrict py,
+                                          float* __restrict pz, const float* __restrict rx,
+                                          const float* __restrict ry, const float* __restrict rz,
+                                          int begin, int end, const GoalTransform& T, float alpha,
+                                          float reach2) {
   float C[3][10];  // per row: L (3), Q (6), t
   for (int a = 0; a < 3; ++a) {
     for (int j = 0; j < 3; ++j) C[a][j] = T.L(a, j);
@@ -50,6 +62,8 @@ int projectQuadratic(float* __restrict px, float* __restrict py, float* __restri
   }
   return bad;
 }
+
+#undef SB_PROJECTION_CLONES
 
 }  // namespace
 
