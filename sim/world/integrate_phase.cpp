@@ -138,7 +138,9 @@ void forParticleRanges(int count, const Body& body) {
 }
 
 // The prediction of particles [begin, end) of one body: x̂ = x + h·v + D·(x − xc) + fall and
-// v̂ = v + T·(v − vc), with D = R − I − h·[ω]× and T = R − I; x takes x̂ too.
+// v̂ = v + T·(v − vc), with D = R − I − h·[ω]× and T = R − I; x takes x̂ too, and xPred a copy
+// unless the body's velocities come from its projection (velocitiesFromProjection: nothing else
+// reads it, and not writing it saves a quarter of the sweep's stores).
 struct PredictStep {
   Eigen::Matrix3f D, T;
   Eigen::Vector3f xc, vc, fall;
@@ -149,6 +151,7 @@ struct PredictStep {
 // twelve columns do not overlap and gave up), every 3×3 product spelled out the way Eigen sums a
 // fixed-size one, m₀d₀ + (m₁d₁ + m₂d₂): the bits are those of the per-particle Eigen::Vector3f
 // expressions this replaced, which ran scalar (issue 17).
+template <bool kKeepPredicted>
 void predictRange(const PredictStep& c, const std::array<float*, 3>& x,
                   const std::array<float*, 3>& xPred, const std::array<float*, 3>& v,
                   const std::array<float*, 3>& vPred, int begin, int end) {
@@ -183,9 +186,14 @@ void predictRange(const PredictStep& c, const std::array<float*, 3>& x,
     const float mx = ((px + h * qx) + (D00 * dx + (D01 * dy + D02 * dz))) + fx;
     const float my = ((py + h * qy) + (D10 * dx + (D11 * dy + D12 * dz))) + fy;
     const float mz = ((pz + h * qz) + (D20 * dx + (D21 * dy + D22 * dz))) + fz;
-    x0[i] = xp0[i] = mx;
-    x1[i] = xp1[i] = my;
-    x2[i] = xp2[i] = mz;
+    x0[i] = mx;
+    x1[i] = my;
+    x2[i] = mz;
+    if constexpr (kKeepPredicted) {
+      xp0[i] = mx;
+      xp1[i] = my;
+      xp2[i] = mz;
+    }
     vp0[i] = qx + (T00 * ex + (T01 * ey + T02 * ez));
     vp1[i] = qy + (T10 * ex + (T11 * ey + T12 * ez));
     vp2[i] = qz + (T20 * ex + (T21 * ey + T22 * ez));
@@ -253,13 +261,21 @@ void runPredictPhase(const WorkLayout& layout, const Vec3& gravity, double h,
         }
         const PredictStep step{
             toRotation, turnVelocity, rm.centre.cast<float>(), rm.velocity.cast<float>(), fall, hf};
+        const bool keepPredicted = !velocitiesFromProjection(m);
         s.vPred.resize(n, 3);
-        s.xPred.resize(n, 3);
+        s.xPred.resize(keepPredicted ? n : 0, 3);
         const std::array<float*, 3> x = writableColumns(s.x), xp = writableColumns(s.xPred),
                                     v = writableColumns(s.v), vp = writableColumns(s.vPred);
-        forParticleRanges(
-            n, [&](int begin, int end) { predictRange(step, x, xp, v, vp, begin, end); });
-        for (int p : m.pinned) s.x.row(p) = s.xPred.row(p) = m.startPositions.row(p);
+        forParticleRanges(n, [&](int begin, int end) {
+          if (keepPredicted)
+            predictRange<true>(step, x, xp, v, vp, begin, end);
+          else
+            predictRange<false>(step, x, xp, v, vp, begin, end);
+        });
+        for (int p : m.pinned) {
+          s.x.row(p) = m.startPositions.row(p);
+          if (keepPredicted) s.xPred.row(p) = m.startPositions.row(p);
+        }
       });
 }
 

@@ -2,7 +2,8 @@
 //
 // Predict     x̂ = x + h·v + h²·gravity, the body's rigid turn advanced as a rotation (not along
 //             its tangent, which would stretch a turning body by √(1 + (hω)²)); v̂ = v turned with
-//             the body. Reads x, v, masses. Writes x (= x̂), xPred, vPred, spin.
+//             the body. Reads x, v, masses. Writes x (= x̂), xPred (bodies with several clusters:
+//             the others need no copy), vPred, spin.
 // Project     per particle x ← x̂ + α(ḡ − x̂), ḡ the blend of its clusters' goals (fitted to x̂ by
 //             the Goals phase; summed once per particle group). Reads goals. Writes x; bad. For a
 //             body with one cluster (nothing moves it between here and Velocities) also v as
