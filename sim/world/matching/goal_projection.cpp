@@ -4,8 +4,8 @@ namespace sb {
 
 namespace {
 
-// Both loops are vectorised (`omp simd`, and -fno-trapping-math for this file, see
-// CMakeLists.txt); scalar, they cost ~10 ns per particle of a 10⁶-particle body (issue 17).
+// The loop the two kernels share is vectorised (`omp simd`, and -fno-trapping-math for this file,
+// see CMakeLists.txt); scalar, it cost ~10 ns per particle of a 10⁶-particle body (issue 17).
 // Compiled for x86-64-v3 (AVX2: eight lanes per operation, the goal's and the reach's arithmetic
 // is what bounds these loops) and the baseline; the loader picks by CPU. Lane-wise IEEE
 // operations, no FMA, and the flag an integer OR: the same bits on either target and as a
