@@ -2,13 +2,16 @@
 //
 // Predict     x̂ = x + h·v + h²·gravity, the body's rigid turn advanced as a rotation (not along
 //             its tangent, which would stretch a turning body by √(1 + (hω)²)); v̂ = v turned with
-//             the body. Reads x, v, masses. Writes x (= x̂), xPred, vPred, spin.
+//             the body. Reads x, v, masses. Writes x (= x̂), xPred (bodies with several clusters:
+//             the others need no copy), vPred, spin.
 // Project     per particle x ← x̂ + α(ḡ − x̂), ḡ the blend of its clusters' goals (fitted to x̂ by
-//             the Goals phase; summed once per particle group). Reads goals. Writes x; bad.
+//             the Goals phase; summed once per particle group). Reads goals. Writes x; bad. For a
+//             body with one cluster (nothing moves it between here and Velocities) also v as
+//             Velocities forms it, in the same sweep: reads vPred, gravity too, writes v.
 // WholeBody   bodies with several clusters: one cluster over the whole body, fitted to x and
 //             projected with the body's α, β and mode (cluster_state.h). Writes x; bad.
-// Velocities  v = v̂ + (x − x̂)/h + h·gravity, then the body's spin as it was before the
-//             sub-step. Reads x, xPred, vPred, spin. Writes v.
+// Velocities  v = v̂ + (x − x̂)/h + h·gravity (bodies with one cluster: formed by Project), then
+//             the body's spin as it was before the sub-step. Reads x, xPred, vPred, spin. Writes v.
 // Damping     per body with damping > 0: v ← v + kd·(v_rigid − v), v_rigid the rigid motion
 //             with the body's momenta (pinned particles immovable). Reads x, v. Writes v.
 // Pinned particles are put back at their start after every phase that moves positions.
@@ -29,9 +32,9 @@ namespace sb {
 void runPredictPhase(const WorkLayout& layout, const Vec3& gravity, double h,
                      std::vector<BodySlot>& slots, const std::vector<int>& order);
 
-void runProjectPhase(const WorkLayout& layout, std::vector<BodySlot>& slots,
-                     const std::vector<int>& order, std::vector<char>& blockBad,
-                     std::vector<char>& bad);
+void runProjectPhase(const WorkLayout& layout, const Vec3& gravity, double h,
+                     std::vector<BodySlot>& slots, const std::vector<int>& order,
+                     std::vector<char>& blockBad, std::vector<char>& bad);
 
 void runWholeBodyPhase(const WorkLayout& layout, std::vector<BodySlot>& slots,
                        const std::vector<int>& order, std::vector<char>& bad);

@@ -32,8 +32,17 @@ namespace {
 using RigidSums = std::array<double, 16>;
 
 // The sums over points [b0, b1), at most one block: float sums in eight lanes, added in double.
-RigidSums rigidBlockSums(const PointColumns& x, const PointColumns& v, const float* w,
-                         const float origin[3], int b0, int b1) {
+// Compiled for x86-64-v3 (AVX2: one register per accumulator of eight lanes; the baseline's
+// sixteen SSE registers hold half of the 32 it needs and it spilled, ~1.2 ns per point, issue
+// 17) and the baseline; the loader picks by CPU. Same bits either way: lane-wise IEEE
+// operations, fixed order, no FMA (tests/sim/test_rigid_motion_targets.cpp builds the baseline
+// alone with SB_MASS_PROPERTIES_BASELINE and compares).
+#ifndef SB_MASS_PROPERTIES_BASELINE
+__attribute__((target_clones("arch=x86-64-v3", "default")))
+#endif
+RigidSums
+rigidBlockSums(const PointColumns& x, const PointColumns& v, const float* w, const float origin[3],
+               int b0, int b1) {
   const float *px = x.c[0], *py = x.c[1], *pz = x.c[2];
   const float *vx = v.c[0], *vy = v.c[1], *vz = v.c[2];
   const float ox = origin[0], oy = origin[1], oz = origin[2];
@@ -61,8 +70,12 @@ RigidSums rigidBlockSums(const PointColumns& x, const PointColumns& v, const flo
     acc[15][l] += wi * (dx * uy - dy * ux);
   };
   int i = b0;
-  for (; i + kLanes <= b1; i += kLanes)
+  for (; i + kLanes <= b1; i += kLanes) {
+    // The lanes as one vector (without `omp simd` GCC 12 left this loop scalar, issue 17):
+    // lane-wise IEEE operations, the same bits.
+#pragma omp simd
     for (int l = 0; l < kLanes; ++l) add(i + l, l);
+  }
   for (; i < b1; ++i) add(i, 0);
   RigidSums t;
   for (int k = 0; k < 16; ++k) {

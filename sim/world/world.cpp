@@ -131,7 +131,8 @@ void World::Data::substep(double h, StepProfile& prof) {
   const GoalsTimes goals = runGoalsPhase(layout, h, slots, goalsScratch, bad);
   prof[Phase::Goals] += goals.goals;
   prof[Phase::Plasticity] += goals.plasticity;
-  timed(Phase::Project, [&] { runProjectPhase(layout, slots, awake, blockBad, bad); });
+  timed(Phase::Project,
+        [&] { runProjectPhase(layout, settings.gravity, h, slots, awake, blockBad, bad); });
   timed(Phase::WholeBody, [&] { runWholeBodyPhase(layout, slots, awake, bad); });
   timed(Phase::Velocities, [&] { runVelocitiesPhase(layout, settings.gravity, h, slots, awake); });
   const ContactSettings contact{settings.bodyContact, float(settings.contactFriction),

@@ -6,10 +6,12 @@
 
 #include <Eigen/Geometry>
 #include <random>
+#include <string>
 
 #include "../sim/tet_bar.h"
 #include "sim/base/parallel.h"
 #include "sim/world/matching/cluster_batch.h"
+#include "sim/world/step_phases.h"
 #include "sim/world/world.h"
 #include "tests/draws.h"
 
@@ -42,8 +44,20 @@ void squash(World& world, BodyHandle b) {
   world.setState(b, x, Eigen::MatrixX3d::Zero(x.rows(), 3));
 }
 
+// Counters: the totals below, and every phase that was timed as "<phase>_ns" (ns per particle per
+// step), so a change to one phase shows where it went.
 void runSteps(benchmark::State& state, World& world, double particles, double memberships) {
-  for (auto _ : state) world.step();
+  StepProfile phases;
+  double steps = 0;
+  for (auto _ : state) {
+    world.step();
+    phases += world.lastProfile();
+    ++steps;
+  }
+  for (Phase phase : kPhases)
+    if (phases[phase] > 0)
+      state.counters[std::string(phaseName(phase)) + "_ns"] =
+          1e9 * phases[phase] / (steps * particles);
   state.counters["ns_per_particle"] = benchmark::Counter(
       particles, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
   if (memberships > 0)

@@ -37,26 +37,34 @@ struct RestColumns {
   return ((nx - nx) + (ny - ny) + (nz - nz)) != 0.0f;
 }
 
-// The same, then, where the particle is still farther than `reach` (m, squared: reach2) from
-// its goal, the part beyond is dropped (docs/design.md §5.3, the body's reach): the same bits as
-// projectParticle wherever the particle ends within reach.
-[[gnu::always_inline]] inline int projectParticleWithin(float* __restrict px, float* __restrict py,
-                                                        float* __restrict pz, int i, float g0,
-                                                        float g1, float g2, float alpha,
-                                                        float reach2) {
-  const float nx = px[i] + alpha * (g0 - px[i]);
-  const float ny = py[i] + alpha * (g1 - py[i]);
-  const float nz = pz[i] + alpha * (g2 - pz[i]);
+// The same for a point (x, y, z), the result in (ox, oy, oz); then, where the particle is still
+// farther than `reach` (m, squared: reach2) from its goal, the part beyond is dropped
+// (docs/design.md §5.3, the body's reach): the same bits as projectParticle wherever the particle
+// ends within reach.
+[[gnu::always_inline]] inline int projectPoint(float x, float y, float z, float g0, float g1,
+                                               float g2, float alpha, float reach2, float& ox,
+                                               float& oy, float& oz) {
+  const float nx = x + alpha * (g0 - x);
+  const float ny = y + alpha * (g1 - y);
+  const float nz = z + alpha * (g2 - z);
   const float dx = nx - g0, dy = ny - g1, dz = nz - g2;
   const float d2 = dx * dx + dy * dy + dz * dz;
   // Selects, not a branch, so that the loops around stay vectorised (the scale is computed
   // everywhere and used only beyond the reach, where d2 > reach2 ≥ 0).
   const bool beyond = d2 > reach2;
   const float scale = std::sqrt(reach2 / std::max(d2, std::numeric_limits<float>::min()));
-  px[i] = beyond ? g0 + scale * dx : nx;
-  py[i] = beyond ? g1 + scale * dy : ny;
-  pz[i] = beyond ? g2 + scale * dz : nz;
+  ox = beyond ? g0 + scale * dx : nx;
+  oy = beyond ? g1 + scale * dy : ny;
+  oz = beyond ? g2 + scale * dz : nz;
   return ((nx - nx) + (ny - ny) + (nz - nz)) != 0.0f;
+}
+
+// projectPoint on particle i of columns px, py, pz, in place.
+[[gnu::always_inline]] inline int projectParticleWithin(float* __restrict px, float* __restrict py,
+                                                        float* __restrict pz, int i, float g0,
+                                                        float g1, float g2, float alpha,
+                                                        float reach2) {
+  return projectPoint(px[i], py[i], pz[i], g0, g1, g2, alpha, reach2, px[i], py[i], pz[i]);
 }
 
 // Particles [begin, end) toward goal(i, g) (g: 3 floats); a goal functor taken by value and
@@ -75,10 +83,21 @@ int projectRange(const PositionColumns& p, int begin, int end, float alpha, Goal
   return bad;
 }
 
+// The velocities of the particles a projection moves, formed in the same sweep: v = (v̂ + (x −
+// x̂)/h) + h·g with x̂ the position before the projection (docs/design.md §5.3, step 5). #P-long
+// columns; v is written only, v̂ read only.
+struct ProjectedVelocities {
+  const float* vPred[3];  // v̂, m/s
+  float* v[3];            // v, m/s
+  float invH;             // 1/h, 1/s
+  float fallSpeed[3];     // h·gravity, m/s
+};
+
 // Particles [begin, end) toward one goal transform g = L·r + t (+ Q·mono(r) when quadratic):
 // a body with one cluster, or the whole-body level; none ends farther than `reach` (m) from its
-// goal (projectParticleWithin). Pure streaming.
+// goal (projectParticleWithin). Pure streaming; with `velocities`, their v too.
 int projectOntoTransform(const PositionColumns& p, const RestColumns& r, int begin, int end,
-                         const GoalTransform& T, bool quadratic, float alpha, float reach);
+                         const GoalTransform& T, bool quadratic, float alpha, float reach,
+                         const ProjectedVelocities* velocities = nullptr);
 
 }  // namespace sb
