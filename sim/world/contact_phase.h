@@ -111,6 +111,7 @@ struct ContactScratch {
     float restitution;  // e, the largest of the two sides'
     bool meets;         // some particle is inside after the integration: the surfaces meet
     float before;       // relative normal velocity of the centres before the solve, m/s
+    Vec3f impulse;      // N·s: what the pair's contacts gave a in the solve (b: the opposite)
   };
   std::vector<SoftPair> softPairs;
   std::vector<SoftImpact> impacts, impactsNext;
@@ -118,6 +119,7 @@ struct ContactScratch {
   // whether the centre velocity is known.
   std::vector<Vec3f> impactVelocity, impactChange, impactShift;
   std::vector<char> impactKnown;
+  std::vector<int> impactPairCount;  // per slot: touching soft pairs this sub-step
 
   // What is kept between sub-steps and keyed by slot (warm starts, impacts): forgotten when
   // bodies are added, removed or reset, since a reused slot is another body.

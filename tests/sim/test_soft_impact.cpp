@@ -9,6 +9,9 @@
 namespace sb {
 namespace {
 
+// The pair's contacts pushed hard enough that holding back is not limited by them.
+constexpr float kFree = 100.0f;
+
 SoftImpact impactAt(float approach, float e, int relaxing) {
   SoftImpact impact;
   impact.approach = approach;
@@ -20,9 +23,9 @@ SoftImpact impactAt(float approach, float e, int relaxing) {
 TEST(SoftImpact, NearMissEndsWithoutAnyCorrection) {
   SoftImpact impact = impactAt(3.0f, 0.5f, 5);
   bool alive = false;
-  EXPECT_EQ(advanceSoftImpact(impact, -2.0f, false, alive), 0.0f);
+  EXPECT_EQ(advanceSoftImpact(impact, -2.0f, false, kFree, alive), 0.0f);
   EXPECT_TRUE(alive);  // still coming
-  EXPECT_EQ(advanceSoftImpact(impact, 0.5f, false, alive), 0.0f);
+  EXPECT_EQ(advanceSoftImpact(impact, 0.5f, false, kFree, alive), 0.0f);
   EXPECT_FALSE(alive);  // left again before the surfaces met: no bounce
 }
 
@@ -32,28 +35,41 @@ TEST(SoftImpact, CompressesThenPartsWithEAndHoldsThatSpeed) {
   bool alive = false;
   // Meeting and compressing: no correction while the centres approach.
   for (float v : {-3.0f, -1.0f, -0.2f}) {
-    EXPECT_EQ(advanceSoftImpact(impact, v, true, alive), 0.0f);
+    EXPECT_EQ(advanceSoftImpact(impact, v, true, kFree, alive), 0.0f);
     EXPECT_TRUE(alive);
   }
   EXPECT_EQ(impact.compressing, 3);
   // Compression over: the relative velocity is set to e·u₀.
-  EXPECT_FLOAT_EQ(advanceSoftImpact(impact, 0.1f, true, alive), e * u0 - 0.1f);
+  EXPECT_FLOAT_EQ(advanceSoftImpact(impact, 0.1f, true, kFree, alive), e * u0 - 0.1f);
   // Release: faster is held back to e·u₀, slower is left alone, for max(compressing + 1,
   // relaxing) = 4 sub-steps.
-  EXPECT_FLOAT_EQ(advanceSoftImpact(impact, 2.7f, true, alive), e * u0 - 2.7f);
-  EXPECT_EQ(advanceSoftImpact(impact, 1.5f, true, alive), 0.0f);
-  EXPECT_FLOAT_EQ(advanceSoftImpact(impact, 2.1f, false, alive), e * u0 - 2.1f);
-  EXPECT_FLOAT_EQ(advanceSoftImpact(impact, 2.2f, false, alive), e * u0 - 2.2f);
+  EXPECT_FLOAT_EQ(advanceSoftImpact(impact, 2.7f, true, kFree, alive), e * u0 - 2.7f);
+  EXPECT_EQ(advanceSoftImpact(impact, 1.5f, true, kFree, alive), 0.0f);
+  EXPECT_FLOAT_EQ(advanceSoftImpact(impact, 2.1f, false, kFree, alive), e * u0 - 2.1f);
+  EXPECT_FLOAT_EQ(advanceSoftImpact(impact, 2.2f, false, kFree, alive), e * u0 - 2.2f);
   EXPECT_TRUE(alive);
-  EXPECT_EQ(advanceSoftImpact(impact, 5.0f, false, alive), 0.0f);
+  EXPECT_EQ(advanceSoftImpact(impact, 5.0f, false, kFree, alive), 0.0f);
   EXPECT_FALSE(alive);
+}
+
+// Holding back takes at most what the pair's own contacts gave in the sub-step: a drag or a
+// third body that parts the pair is not fought.
+TEST(SoftImpact, HoldTakesBackOnlyWhatThePairsContactsGave) {
+  SoftImpact impact = impactAt(3.0f, 0.0f, 10);
+  bool alive = false;
+  EXPECT_EQ(advanceSoftImpact(impact, -1.0f, true, kFree, alive), 0.0f);
+  EXPECT_FLOAT_EQ(advanceSoftImpact(impact, 0.5f, true, 0.2f, alive), -0.2f);
+  EXPECT_FLOAT_EQ(advanceSoftImpact(impact, 0.5f, true, 0.7f, alive), -0.5f);
+  EXPECT_EQ(advanceSoftImpact(impact, 0.5f, false, 0.0f, alive), 0.0f);
+  EXPECT_EQ(advanceSoftImpact(impact, 0.5f, false, -1.0f, alive), 0.0f);  // they pulled: nothing
+  EXPECT_TRUE(alive);
 }
 
 TEST(SoftImpact, InelasticImpactStopsAtOnceWhenTheSolveAlreadyStoppedIt) {
   SoftImpact impact = impactAt(2.0f, 0.0f, 1);
   bool alive = false;
   // The solve stopped the pair in the sub-step the surfaces met: released at once, to 0.
-  EXPECT_FLOAT_EQ(advanceSoftImpact(impact, 0.3f, true, alive), -0.3f);
+  EXPECT_FLOAT_EQ(advanceSoftImpact(impact, 0.3f, true, kFree, alive), -0.3f);
   EXPECT_TRUE(alive);
   EXPECT_EQ(impact.compressing, 0);
 }

@@ -12,9 +12,17 @@ int relaxSubsteps(double alpha) {
   return int(std::min(n, double(kMaxRelaxSubsteps)));
 }
 
-float advanceSoftImpact(SoftImpact& impact, float relativeNormalVelocity, bool meets, bool& alive) {
+float advanceSoftImpact(SoftImpact& impact, float relativeNormalVelocity, bool meets, float pushed,
+                        bool& alive) {
   alive = true;
   const float target = impact.restitution * impact.approach;
+  // Holding back takes at most what the pair's contacts gave (never pulls the bodies together
+  // against what else moves them).
+  auto holdBack = [&] {
+    return relativeNormalVelocity > target
+               ? std::max(target - relativeNormalVelocity, -std::max(pushed, 0.0f))
+               : 0.0f;
+  };
   if (!impact.met) {
     if (!meets) {
       alive = relativeNormalVelocity < 0.0f;  // still coming, or a near miss
@@ -29,7 +37,7 @@ float advanceSoftImpact(SoftImpact& impact, float relativeNormalVelocity, bool m
     }
     // Compression is over: the centres separate with e·u₀.
     impact.released = 0;
-    return target - relativeNormalVelocity;
+    return relativeNormalVelocity < target ? target - relativeNormalVelocity : holdBack();
   }
   // Release: the stored deformation may not throw the pair apart faster than e·u₀, for as long
   // as the compression took and the softer body needs to relax (and at least one sub-step).
@@ -38,7 +46,7 @@ float advanceSoftImpact(SoftImpact& impact, float relativeNormalVelocity, bool m
     alive = false;
     return 0.0f;
   }
-  return relativeNormalVelocity > target ? target - relativeNormalVelocity : 0.0f;
+  return holdBack();
 }
 
 }  // namespace sb

@@ -16,10 +16,13 @@
 // spring's two half-periods are equal), and at least until the softer body has relaxed what it
 // stored (relaxSubsteps), it is held at most e·u₀, so the stored deformation that springs back does
 // not throw the body off faster than e says (e = 0: it lands dead). The hold is bounded in time
-// so that a body resting after an impact can still be lifted off by a drag. Each correction is one
-// impulse along n on the two centres of mass (every particle of a body changes its velocity by
-// the same amount), equal and opposite: momentum is exact, and the kinetic energy of the
-// relative motion of the centres never exceeds ½μ(e·u₀)² ≤ the impact's (μ the reduced mass).
+// so that a body resting after an impact can still be lifted off by a drag; it takes back at
+// most what the pair's own contacts gave (`pushed`), and the phase applies it only to a pair
+// whose bodies touch nothing else (contact_phase.cpp: in piles the holds fought each other). Each
+// correction is one impulse along n on the two centres of mass (every particle of a body changes
+// its velocity by the same amount), equal and opposite: momentum is exact, and the kinetic energy
+// of the relative motion of the centres never exceeds ½μ(e·u₀)² ≤ the impact's (μ the reduced
+// mass).
 #pragma once
 
 #include <array>
@@ -58,6 +61,10 @@ inline constexpr int kMaxRelaxSubsteps = 100;
 // particle inside after the integration). Returns the change of that velocity to apply this
 // sub-step (m/s; 0 for none). Returns false in `alive` once the impact is over, or was a near
 // miss (the centres stopped approaching before the surfaces met).
-float advanceSoftImpact(SoftImpact& impact, float relativeNormalVelocity, bool meets, bool& alive);
+// `pushed`: how much the pair's own contacts raised that relative velocity in this sub-step
+// (m/s); holding the pair back takes at most that, so the hold never fights what else moves
+// the bodies (other bodies, drags, gravity).
+float advanceSoftImpact(SoftImpact& impact, float relativeNormalVelocity, bool meets, float pushed,
+                        bool& alive);
 
 }  // namespace sb
