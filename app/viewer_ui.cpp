@@ -157,6 +157,11 @@ void ViewerApp::drawWorldPanel() {
   if (sliderDouble("body friction", &s.contactFriction, 0.0f, 2.0f, "%.2f",
                    "Friction coefficient mu between bodies."))
     changed = true;
+  if (sliderDouble("rolling resistance", &s.rollingResistance, 0.0f, 0.3f, "%.3f",
+                   "Couple against rolling and rocking, as a share of each body's radius\n"
+                   "times the contact force (0: none). A ball stays put on slopes below\n"
+                   "about atan of it; bodies rocking on a rounded part come to rest sooner."))
+    changed = true;
   if (ImGui::Checkbox("sleep", &s.sleep)) changed = true;
   tooltip(
       "Bodies at rest fall asleep and skip the step until something wakes them\n"

@@ -132,6 +132,7 @@ void applyWorldOptions(WorldSettings& ws) {
 #ifndef LAB_BASELINE
   if (has("ethr")) ws.restitutionThreshold = num("ethr", 1.0);
   if (has("sleep")) ws.sleep = num("sleep", 1) != 0;
+  if (has("roll")) ws.rollingResistance = num("roll", 0.05);
 #endif
 }
 
@@ -392,9 +393,28 @@ int pile() {
     if (sleeping < N) lastSleepAll = -1;
     const auto bs = w.bodies();
     for (size_t i = 0; i < bs.size(); ++i) growth = std::max(growth, rmsSize(w, bs[i]) / size0[i]);
-    if (s % every == 0 || s == steps)
-      std::printf("%6.2f %10.4g %10.4g %10.4g %d\n", w.time(), v, kinetic(w),
+    if (s % every == 0 || s == steps) {
+      std::printf("%6.2f %10.4g %10.4g %10.4g %d", w.time(), v, kinetic(w),
                   kinetic(w) + potential(w), sleeping);
+      if (num("who", 0) > 0) {  // the fastest body: index, mode, its fastest particle's height
+        size_t f = 0;
+        double fv = -1;
+        Eigen::Index fi = 0;
+        for (size_t i = 0; i < bs.size(); ++i) {
+          Eigen::Index at = 0;
+          const double bv = w.velocities(bs[i]).rowwise().norm().maxCoeff(&at);
+          if (bv > fv) {
+            fv = bv;
+            f = i;
+            fi = at;
+          }
+        }
+        std::printf("  fastest body %zu (%s) particle %ld at y %.3f, centre v %.4f m/s", f,
+                    modeName(w.params(bs[f]).mode), long(fi), w.positions(bs[f])(fi, 1),
+                    (w.linearMomentum(bs[f]) / w.mass(bs[f])).norm());
+      }
+      std::printf("\n");
+    }
     if (!std::isfinite(v) || v > 1e3) {
       std::printf("blew up at step %d\n", s);
       break;

@@ -451,6 +451,8 @@ Scene parseScene(const std::string& text, const std::string& name, const std::st
         w.number("contactFriction", settings.contactFriction, limits::friction);
     settings.restitutionThreshold = w.number("restitutionThreshold", settings.restitutionThreshold,
                                              limits::restitutionThreshold);
+    settings.rollingResistance =
+        w.number("rollingResistance", settings.rollingResistance, limits::rollingResistance);
     settings.sleep = w.boolean("sleep", settings.sleep);
     w.rejectUnknown();
   }
@@ -529,6 +531,7 @@ void saveScene(const Scene& scene, const std::string& path) {
                    {"bodyContact", w.settings().bodyContact},
                    {"contactFriction", w.settings().contactFriction},
                    {"restitutionThreshold", w.settings().restitutionThreshold},
+                   {"rollingResistance", w.settings().rollingResistance},
                    {"sleep", w.settings().sleep}};
   json colliders = json::array();
   for (const Collider& c : w.colliders()) {

@@ -86,6 +86,9 @@ struct BodyModel {
   // Sleep: the body may sleep once every particle has been slower than this for a while (m/s;
   // scaled to its size, world.cpp).
   float sleepSpeed = 0;
+  // Rest radius of gyration √(Σ mᵢ|rᵢ|² / M) about the rest centre of mass (m): the body's
+  // size as it turns (the reach, rolling resistance's lever).
+  float gyrationRadius = 0;
   // The reach: no particle ends a goal projection farther than this from its goal (m; the
   // rest radius of gyration, ×kReachOfGyration; docs/design.md §5.3).
   float reach = 0;

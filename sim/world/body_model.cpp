@@ -131,7 +131,8 @@ std::shared_ptr<BodyModel> buildBodyModel(const BodyDef& def,
   m->sleepSpeed = float(std::min(kMaxSleepSpeed, kSleepSpeedPerSize * box.diagonal().norm()));
   double inertia = 0;  // Σ m|r|², r from the rest centre of mass (the body frame's origin)
   for (int i = 0; i < n; ++i) inertia += double(m->mass[i]) * double(m->rest.row(i).squaredNorm());
-  m->reach = float(kReachOfGyration * std::sqrt(inertia / m->totalMass));
+  m->gyrationRadius = float(std::sqrt(inertia / m->totalMass));
+  m->reach = float(kReachOfGyration) * m->gyrationRadius;
   m->bodyWeight = m->mass;
   for (int p : m->pinned) m->bodyWeight[p] *= kPinnedWeightFactor;
   buildClusters(*m, def.clusters);

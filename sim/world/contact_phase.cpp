@@ -5,6 +5,7 @@
 
 #include "sim/base/parallel_for.h"
 #include "sim/base/union_find.h"
+#include "sim/world/contact/rolling_resistance.h"
 #include "sim/world/mass_properties.h"
 
 namespace sb {
@@ -449,6 +450,100 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
   std::sort(scratch.deepPairs.begin(), scratch.deepPairs.end());
 }
 
+// Rolling resistance (contact/rolling_resistance.h; docs/design.md §5.5), after the solve and
+// the impacts: each pair that touched in this sub-step (a body and a collider, or two bodies)
+// exchanges a couple against its relative spin, up to c·ρ times the normal impulse its contacts
+// carried (ρ the smaller rest radius of gyration). It acts on the velocities only, as damping
+// does, by Δω × (x − xc) on every particle: the spin is taken from the particles' velocities as
+// they are now (the solve's fitted spin is linear about the sub-step's start and, at one-second
+// sub-steps, far from the particles' own), so each couple can only take energy away. Pairs go
+// in key order, each seeing the spin the earlier ones left. Sleeping and pinned bodies take no
+// couple (spin zero and their own spin, respectively, as seen by the other side: zero).
+void resistRolling(ContactScratch& scratch, const std::vector<SolverBody>& bodies,
+                   std::vector<BodySlot>& slots, float coefficient, int minParallel) {
+  const std::vector<int>& solverSlot = scratch.solverSlot;
+  std::vector<ContactScratch::RollingPair>& pairs = scratch.rollingPairs;
+  pairs.clear();
+  for (const ContactPoint& cp : scratch.points) {
+    const float load = cp.lambda[0] + cp.lambda[1];
+    if (!(load > 0.0f)) continue;
+    const std::pair<int, int> key =
+        cp.obstacle < 0
+            ? std::make_pair(cp.probe, -1 - cp.collider)
+            : std::make_pair(std::min(cp.probe, cp.obstacle), std::max(cp.probe, cp.obstacle));
+    pairs.push_back({key, load});
+  }
+  if (pairs.empty()) return;
+  // In key order; a pair's loads summed in point order (stable), so the bits are the same
+  // for any thread count.
+  std::stable_sort(pairs.begin(), pairs.end(),
+                   [](const auto& a, const auto& b) { return a.key < b.key; });
+  size_t merged = 0;
+  for (size_t k = 1; k < pairs.size(); ++k)
+    if (pairs[k].key == pairs[merged].key)
+      pairs[merged].load += pairs[k].load;
+    else
+      pairs[++merged] = pairs[k];
+  pairs.resize(merged + 1);
+
+  const int nb = static_cast<int>(bodies.size());
+  scratch.rollingMotion.resize(size_t(nb));
+  scratch.rollingSpinChange.assign(size_t(nb), Vec3::Zero());
+  scratch.rollingTurns.assign(size_t(nb), 0);
+  for (const auto& pair : pairs) {
+    scratch.rollingTurns[size_t(pair.key.first)] = 1;
+    if (pair.key.second >= 0) scratch.rollingTurns[size_t(pair.key.second)] = 1;
+  }
+  parallelFor(nb, minParallel, [&](int b) {
+    const BodySlot& slot = slots[size_t(solverSlot[size_t(b)])];
+    char& turns = scratch.rollingTurns[size_t(b)];
+    turns = turns && !bodies[size_t(b)].immovable && slot.model->pinned.empty();
+    if (!turns) return;
+    const BodyState& s = slot.state;
+    scratch.rollingMotion[size_t(b)] =
+        rigidMotion(PointColumns{{s.x.col(0).data(), s.x.col(1).data(), s.x.col(2).data()}},
+                    PointColumns{{s.v.col(0).data(), s.v.col(1).data(), s.v.col(2).data()}},
+                    slot.model->mass.data(), slot.model->particleCount());
+  });
+
+  for (const auto& pair : pairs) {
+    const int a = pair.key.first, b = pair.key.second;
+    const bool aTurns = scratch.rollingTurns[size_t(a)] != 0;
+    const bool bTurns = b >= 0 && scratch.rollingTurns[size_t(b)] != 0;
+    if (!aTurns && !bTurns) continue;
+    auto spinOf = [&](int body, bool turns) -> Vec3 {
+      return turns ? Vec3(scratch.rollingMotion[size_t(body)].omega +
+                          scratch.rollingSpinChange[size_t(body)])
+                   : Vec3::Zero();
+    };
+    auto invInertiaOf = [&](int body, bool turns) -> Mat3 {
+      return turns ? scratch.rollingMotion[size_t(body)].inverseInertia : Mat3::Zero();
+    };
+    float lever = coefficient * slots[size_t(solverSlot[size_t(a)])].model->gyrationRadius;
+    if (b >= 0)
+      lever =
+          std::min(lever, coefficient * slots[size_t(solverSlot[size_t(b)])].model->gyrationRadius);
+    const Vec3 couple =
+        rollingCouple(invInertiaOf(a, aTurns), invInertiaOf(b, bTurns),
+                      spinOf(a, aTurns) - spinOf(b, bTurns), double(lever) * pair.load);
+    if (aTurns)
+      scratch.rollingSpinChange[size_t(a)] +=
+          scratch.rollingMotion[size_t(a)].inverseInertia * couple;
+    if (bTurns)
+      scratch.rollingSpinChange[size_t(b)] -=
+          scratch.rollingMotion[size_t(b)].inverseInertia * couple;
+  }
+
+  parallelFor(nb, minParallel, [&](int b) {
+    const Vec3f dw = scratch.rollingSpinChange[size_t(b)].cast<float>();
+    if (!scratch.rollingTurns[size_t(b)] || dw.isZero()) return;
+    BodyState& s = slots[size_t(solverSlot[size_t(b)])].state;
+    const Vec3f c = scratch.rollingMotion[size_t(b)].centre.cast<float>();
+    for (int i = 0; i < s.x.rows(); ++i)
+      s.v.row(i) += dw.cross(Vec3f(s.x.row(i).transpose() - c)).transpose();
+  });
+}
+
 int runSolvePhase(const WorkLayout& layout, const ContactSettings& settings, double h,
                   std::vector<BodySlot>& slots, const std::vector<int>& order,
                   const std::vector<Collider>& colliders, ContactScratch& scratch) {
@@ -606,6 +701,8 @@ int runSolvePhase(const WorkLayout& layout, const ContactSettings& settings, dou
   });
   gatherSoftImpulses(softPairs, points, solverSlot);
   runSoftImpacts(scratch, bodies, slots, float(h), settings.restitutionThreshold);
+  if (settings.rollingResistance > 0.0f)
+    resistRolling(scratch, bodies, slots, settings.rollingResistance, minParallel);
 
   // Keep the impulses for the next sub-step; report the pairs that touched and the contacts
   // that carried load.

@@ -29,6 +29,7 @@
 #include "sim/world/contact/contact_solver.h"
 #include "sim/world/contact/soft_impact.h"
 #include "sim/world/contact/surface_grid.h"
+#include "sim/world/mass_properties.h"
 #include "sim/world/work_layout.h"
 
 namespace sb {
@@ -37,6 +38,7 @@ struct ContactSettings {
   bool bodyContact = true;
   float friction = 0.5f;              // μ between bodies
   float restitutionThreshold = 1.0f;  // m/s: slower approaches do not bounce
+  float rollingResistance = 0.0f;     // dimensionless, WorldSettings::rollingResistance
   Vec3 gravity = Vec3::Zero();        // m/s² (the order of shock propagation)
 };
 
@@ -120,6 +122,18 @@ struct ContactScratch {
   std::vector<Vec3f> impactVelocity, impactChange, impactShift;
   std::vector<char> impactKnown;
   std::vector<int> impactPairCount;  // per slot: touching soft pairs this sub-step
+
+  // Rolling resistance (rolling_resistance.h): the pairs that touched, as (solver body, solver
+  // body or −1 − collider) with their normal impulse (N·s), sorted; per solver body its rigid
+  // motion from the velocities after the solve, and whether it takes couples.
+  struct RollingPair {
+    std::pair<int, int> key;
+    float load;
+  };
+  std::vector<RollingPair> rollingPairs;
+  std::vector<RigidMotion> rollingMotion;
+  std::vector<Vec3> rollingSpinChange;  // rad/s, per solver body
+  std::vector<char> rollingTurns;
 
   // What is kept between sub-steps and keyed by slot (warm starts, impacts): forgotten when
   // bodies are added, removed or reset, since a reused slot is another body.

@@ -29,6 +29,7 @@ inline constexpr ParamRange gravityNorm{0.0, 1e4};  // m/s², length of the grav
 inline constexpr ParamRange friction{0.0, 1000.0};  // μ, colliders and body–body contact
 inline constexpr ParamRange restitution{0.0, 1.0};  // e, colliders and bodies
 inline constexpr ParamRange restitutionThreshold{0.0, 1e4};  // m/s
+inline constexpr ParamRange rollingResistance{0.0, 1.0};     // dimensionless (lever / ρ)
 // Body parameters.
 inline constexpr ParamRange alpha{0.0, 1.0};
 inline constexpr ParamRange beta{0.0, 1.0};

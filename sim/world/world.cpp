@@ -136,7 +136,8 @@ void World::Data::substep(double h, StepProfile& prof) {
   timed(Phase::WholeBody, [&] { runWholeBodyPhase(layout, slots, awake, bad); });
   timed(Phase::Velocities, [&] { runVelocitiesPhase(layout, settings.gravity, h, slots, awake); });
   const ContactSettings contact{settings.bodyContact, float(settings.contactFriction),
-                                float(settings.restitutionThreshold), settings.gravity};
+                                float(settings.restitutionThreshold),
+                                float(settings.rollingResistance), settings.gravity};
   timed(Phase::Contacts,
         [&] { runContactsPhase(layout, contact, h, slots, order, colliders, contactScratch); });
   timed(Phase::Solve, [&] {
@@ -191,12 +192,15 @@ void World::setSettings(const WorldSettings& s) {
   requireRange("substeps", limits::substeps, s.substeps);
   requireRange("contactFriction", limits::friction, s.contactFriction);
   requireRange("restitutionThreshold", limits::restitutionThreshold, s.restitutionThreshold);
-  // Gravity, friction, restitution, contact or sleep changes can set resting bodies moving.
+  requireRange("rollingResistance", limits::rollingResistance, s.rollingResistance);
+  // Gravity, friction, restitution, rolling resistance, contact or sleep changes can set resting
+  // bodies moving.
   const WorldSettings& o = d_->settings;
   const bool same = o.gravity == s.gravity && o.timeStep == s.timeStep &&
                     o.substeps == s.substeps && o.bodyContact == s.bodyContact &&
                     o.contactFriction == s.contactFriction &&
-                    o.restitutionThreshold == s.restitutionThreshold && o.sleep == s.sleep;
+                    o.restitutionThreshold == s.restitutionThreshold &&
+                    o.rollingResistance == s.rollingResistance && o.sleep == s.sleep;
   d_->settings = s;
   if (!same) d_->wakeAll();
 }

@@ -43,6 +43,11 @@ struct WorldSettings {
   // Approach speed (m/s, [0, 1e4]) below which contacts do not bounce whatever their
   // restitution: a resting body's small impacts (gravity's h·g every sub-step) stay inelastic.
   double restitutionThreshold = 1.0;
+  // Rolling resistance, dimensionless, [0, 1]: a pair in contact resists its relative spin with
+  // a couple up to c·ρ·N (N the normal force, ρ the smaller rest radius of gyration of the
+  // two; docs/design.md §5.5), so bodies rolling or rocking on a rounded part come to rest; a
+  // ball stays put on slopes below about atan(c). 0: contacts exert no couple.
+  double rollingResistance = 0.05;
   // Bodies at rest sleep: a body whose particles have all been slower than its sleep speed
   // (5 % of its size per second, at most 5 cm/s) for 0.5 s, together with every body it
   // touches, skips the whole step until something wakes it (an awake body touching it, a drag,

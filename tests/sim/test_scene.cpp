@@ -85,6 +85,8 @@ TEST(Scene, ErrorsNameFileFieldAndReason) {
                    "colliders[0].restitution: must be in [0, 1], got 1.5");
   expectSceneError(body(R"(, "restitution": -0.1)"), "bodies[0].restitution: must be in [0, 1]");
   expectSceneError(R"({"world": {"sleep": 1}, "bodies": []})", "world.sleep");
+  expectSceneError(R"({"world": {"rollingResistance": 2}, "bodies": []})",
+                   "world.rollingResistance: must be in [0, 1], got 2");
   expectSceneError(R"({"bodies": [{"mesh": "/no/such/mesh.obj"}]})",
                    "bodies[0].mesh: /no/such/mesh.obj");
   // A render mesh needs a valid closed cage; a mesh with no faces cannot be one.
@@ -109,6 +111,7 @@ TEST(Scene, SaveRoundTripsParametersAtomically) {
   s.substeps = 7;
   s.sleep = false;
   s.restitutionThreshold = 0.25;
+  s.rollingResistance = 0.125;
   scene.world.setSettings(s);
   const fs::path dir = fs::temp_directory_path() / "softbody_save_test" / "sub";
   fs::create_directories(dir);
@@ -125,6 +128,7 @@ TEST(Scene, SaveRoundTripsParametersAtomically) {
   EXPECT_DOUBLE_EQ(q.restitution, 0.45);
   EXPECT_FALSE(back.world.settings().sleep);
   EXPECT_DOUBLE_EQ(back.world.settings().restitutionThreshold, 0.25);
+  EXPECT_DOUBLE_EQ(back.world.settings().rollingResistance, 0.125);
   EXPECT_EQ(back.world.clusterCount(back.bodies[1].handle),
             scene.world.clusterCount(scene.bodies[1].handle));
   // A failed save leaves the existing file as it was.
@@ -142,11 +146,12 @@ TEST(Scene, SaveRoundTripsParametersAtomically) {
 
 TEST(Scene, RestitutionAndSleepAreReadFromTheFile) {
   const Scene scene = parseScene(
-      R"({"world": {"sleep": false, "restitutionThreshold": 0.5},
+      R"({"world": {"sleep": false, "restitutionThreshold": 0.5, "rollingResistance": 0},
           "colliders": [{"type": "plane", "restitution": 0.8}], "bodies": []})",
       "inline", ".");
   EXPECT_FALSE(scene.world.settings().sleep);
   EXPECT_DOUBLE_EQ(scene.world.settings().restitutionThreshold, 0.5);
+  EXPECT_EQ(scene.world.settings().rollingResistance, 0.0);
   ASSERT_EQ(scene.world.colliders().size(), 1u);
   EXPECT_DOUBLE_EQ(scene.world.colliders()[0].restitution, 0.8);
 }
