@@ -12,7 +12,6 @@
 #include <sstream>
 
 #include "sim/base/file_io.h"
-#include "sim/base/parallel_for.h"
 #include "sim/cage/embedding.h"
 #include "sim/mesh/mesh_io.h"
 #include "sim/world/param_ranges.h"
@@ -611,13 +610,6 @@ void Scene::renderVertices(int body, PointsRowMajor& out) const {
   } else {
     out = particles;
   }
-}
-
-void Scene::renderVerticesAll(std::vector<PointsRowMajor>& out) const {
-  out.resize(bodies.size());
-  // One body's mesh is too small to split (a few thousand vertices), many bodies are not.
-  parallelFor(static_cast<int>(bodies.size()), 2,
-              [&](int i) { renderVertices(i, out[size_t(i)]); });
 }
 
 const std::vector<std::array<int, 3>>& Scene::renderTriangles(int body) const {

@@ -55,8 +55,6 @@ struct Scene {
   // Current render-mesh vertices of body i (#V×3 rows): W · particle positions. Falls back to
   // the particle positions when the body has no render mesh.
   void renderVertices(int body, PointsRowMajor& out) const;
-  // The same for every body (out gets one entry per body), bodies deformed in parallel.
-  void renderVerticesAll(std::vector<PointsRowMajor>& out) const;
   // Triangles to draw for body i: the render mesh's, else the particle mesh's.
   const std::vector<std::array<int, 3>>& renderTriangles(int body) const;
 };

@@ -23,7 +23,8 @@ class SceneRunner {
   // deform: update every render mesh after each step (as the viewer draws them).
   SceneRunner(Scene& scene, bool deform);
 
-  // One World::step(); render meshes deformed when enabled; each event handed to onEvent.
+  // One World::step(); render meshes deformed when enabled (those of bodies that sleep and were
+  // deformed since they fell asleep are current and skipped); each event handed to onEvent.
   void step(const std::function<void(const WorldEvent&)>& onEvent = {});
 
   const RunTotals& totals() const { return totals_; }
@@ -37,6 +38,8 @@ class SceneRunner {
   bool deform_;
   RunTotals totals_;
   std::vector<PointsRowMajor> meshes_;
+  // Per body: its mesh was deformed while it slept (current until it wakes).
+  std::vector<char> currentWhileAsleep_;
 };
 
 }  // namespace sb

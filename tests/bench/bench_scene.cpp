@@ -48,6 +48,24 @@ BENCHMARK(BM_LargeScene)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
+// The large scene once every body sleeps (issue 11: a resting scene should cost next to
+// nothing): stepped until all sleep (4.4 s simulated), then timed with the render-mesh deform.
+void BM_LargeSceneAsleep(benchmark::State& state) {
+  setThreadCount(int(state.range(0)));
+  Scene scene = loadScene(kAssets + "/scenes/large.json");
+  for (int s = 0; s < 1200 && scene.world.sleepingCount() < int(scene.bodies.size()); ++s)
+    scene.world.step();
+  SceneRunner runner(scene, /*deform=*/true);
+  runner.step();  // the first deform of every mesh
+  runner.clearTotals();
+  for (auto _ : state) runner.step();
+  reportPhases(state, runner.totals());
+  state.counters["sleeping"] = double(scene.world.sleepingCount());
+  state.counters["bodies"] = double(scene.bodies.size());
+  setThreadCount(0);
+}
+BENCHMARK(BM_LargeSceneAsleep)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond)->UseRealTime();
+
 // How the contact phase grows with the number of bodies: N bunny cages (164 particles each) in
 // a square layer on the floor, each touching its neighbours, settled for 2 s before timing.
 void BM_ContactScaling(benchmark::State& state) {
