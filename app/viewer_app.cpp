@@ -268,6 +268,10 @@ void ViewerApp::resetSimulation() {
 void ViewerApp::updateMeshes() {
   for (std::size_t i = 0; i < views_.size(); ++i) {
     BodyView& v = views_[i];
+    const bool asleep = scene_.world.isSleeping(scene_.bodies[i].handle);
+    if (asleep && v.currentWhileAsleep) continue;
+    v.currentWhileAsleep = asleep;
+    v.uploaded = false;
     scene_.renderVertices(static_cast<int>(i), v.vertices);
     const auto n = static_cast<std::size_t>(v.vertices.rows());
     // The cage module's normals (area weighted, unit); a vertex no triangle uses gets +y so the
@@ -427,8 +431,10 @@ void ViewerApp::renderFrame() {
   // Closed, outward-oriented meshes: culling back faces halves llvmpipe's triangle work.
   if (cullBackFaces_) glEnable(GL_CULL_FACE);
   for (BodyView& v : views_) {
-    v.mesh->setVertices(v.vertices.data(), v.normals.data(),
-                        static_cast<std::size_t>(v.vertices.rows()));
+    if (!v.uploaded)
+      v.mesh->setVertices(v.vertices.data(), v.normals.data(),
+                          static_cast<std::size_t>(v.vertices.rows()));
+    v.uploaded = true;
     if (!options_.hideBodies) meshRenderer_->draw(*v.mesh, v.colour);
   }
   glDisable(GL_CULL_FACE);
