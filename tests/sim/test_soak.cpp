@@ -112,6 +112,7 @@ SoakResult soak(int steps, unsigned seed, int warmUp, double alphaMin) {
       const double gz = uniform(-1, 1), gy = -uniform(5, 15), gx = uniform(-1, 1);
       ws.gravity = Vec3(gx, gy, gz);
       ws.contactFriction = uniform(0, 1.5);
+      ws.rollingResistance = uniform(0, 1);  // the whole documented range
       w.setSettings(ws);
     }
     w.step();
