@@ -46,11 +46,27 @@ constexpr double kMinTurn = 1e-3;
 }
 
 // A body with one cluster has its velocities formed by the Project phase, in the sweep that moves
-// its particles (x̂ is the position that sweep reads: Predict wrote it to x and xPred alike, and
-// nothing moves the body in between); the Velocities phase adds only the spin correction. Saves
-// one sweep over x, x̂, v̂ and v per sub-step (issue 17).
+// its particles (x̂ is the position that sweep reads: Predict wrote it to x, and nothing moves the
+// body in between; v̂ it forms from v, which nothing changes in between either); the Velocities
+// phase adds only the spin correction. Saves one sweep over x, x̂, v̂ and v per sub-step, and the
+// prediction's stores of x̂ and v̂ (issue 17).
 bool velocitiesFromProjection(const BodyModel& m) {
   return m.wholeBodyCluster;
+}
+
+// What the Project phase forms the velocities of a body with one cluster from
+// (velocitiesFromProjection): its v, the prediction's turn, 1/h and h·gravity.
+ProjectedVelocities projectedVelocities(BodyState& s, float invH,
+                                        const Eigen::Vector3f& fallSpeed) {
+  ProjectedVelocities p{};
+  for (int a = 0; a < 3; ++a) {
+    p.v[a] = s.v.col(a).data();
+    for (int b = 0; b < 3; ++b) p.turn[a][b] = s.turn(a, b);
+    p.turnCentre[a] = s.turnCentre[a];
+    p.fallSpeed[a] = fallSpeed[a];
+  }
+  p.invH = invH;
+  return p;
 }
 
 // Moves particles [begin, end) of one body α of the way to the blend of their clusters' goals;
@@ -138,9 +154,9 @@ void forParticleRanges(int count, const Body& body) {
 }
 
 // The prediction of particles [begin, end) of one body: x̂ = x + h·v + D·(x − xc) + fall and
-// v̂ = v + T·(v − vc), with D = R − I − h·[ω]× and T = R − I; x takes x̂ too, and xPred a copy
-// unless the body's velocities come from its projection (velocitiesFromProjection: nothing else
-// reads it, and not writing it saves a quarter of the sweep's stores).
+// v̂ = v + T·(v − vc), with D = R − I − h·[ω]× and T = R − I; x takes x̂, and xPred a copy and
+// vPred v̂ unless the body's velocities come from its projection (velocitiesFromProjection:
+// Project forms v̂ itself where it reads v, and not writing them halves the sweep's stores).
 struct PredictStep {
   Eigen::Matrix3f D, T;
   Eigen::Vector3f xc, vc, fall;
@@ -193,10 +209,10 @@ void predictRange(const PredictStep& c, const std::array<float*, 3>& x,
       xp0[i] = mx;
       xp1[i] = my;
       xp2[i] = mz;
+      vp0[i] = qx + (T00 * ex + (T01 * ey + T02 * ez));
+      vp1[i] = qy + (T10 * ex + (T11 * ey + T12 * ez));
+      vp2[i] = qz + (T20 * ex + (T21 * ey + T22 * ez));
     }
-    vp0[i] = qx + (T00 * ex + (T01 * ey + T02 * ez));
-    vp1[i] = qy + (T10 * ex + (T11 * ey + T12 * ez));
-    vp2[i] = qz + (T20 * ex + (T21 * ey + T22 * ez));
   }
 }
 
@@ -262,8 +278,10 @@ void runPredictPhase(const WorkLayout& layout, const Vec3& gravity, double h,
         const PredictStep step{
             toRotation, turnVelocity, rm.centre.cast<float>(), rm.velocity.cast<float>(), fall, hf};
         const bool keepPredicted = !velocitiesFromProjection(m);
-        s.vPred.resize(n, 3);
         s.xPred.resize(keepPredicted ? n : 0, 3);
+        s.vPred.resize(keepPredicted ? n : 0, 3);
+        s.turn = turnVelocity;
+        s.turnCentre = step.vc;
         const std::array<float*, 3> x = writableColumns(s.x), xp = writableColumns(s.xPred),
                                     v = writableColumns(s.v), vp = writableColumns(s.vPred);
         forParticleRanges(n, [&](int begin, int end) {
@@ -299,11 +317,7 @@ void runProjectPhase(const WorkLayout& layout, const Vec3& gravity, double h,
     const ParticleBlock& blk = blocks[size_t(i)];
     BodySlot& b = slots[size_t(blk.slot)];
     BodyState& st = b.state;
-    const ProjectedVelocities velocities{
-        {st.vPred.col(0).data(), st.vPred.col(1).data(), st.vPred.col(2).data()},
-        {st.v.col(0).data(), st.v.col(1).data(), st.v.col(2).data()},
-        invH,
-        {fallSpeed.x(), fallSpeed.y(), fallSpeed.z()}};
+    const ProjectedVelocities velocities = projectedVelocities(st, invH, fallSpeed);
     blockBad[size_t(i)] = projectBlock(*b.model, st, b.params, blk.begin, blk.end, velocities);
   });
   for (size_t i = 0; i < blocks.size(); ++i)

@@ -2,12 +2,13 @@
 //
 // Predict     x̂ = x + h·v + h²·gravity, the body's rigid turn advanced as a rotation (not along
 //             its tangent, which would stretch a turning body by √(1 + (hω)²)); v̂ = v turned with
-//             the body. Reads x, v, masses. Writes x (= x̂), xPred (bodies with several clusters:
-//             the others need no copy), vPred, spin.
+//             the body. Reads x, v, masses. Writes x (= x̂), spin; xPred and vPred for bodies
+//             with several clusters, the turn that forms v̂ for the others (no copies there).
 // Project     per particle x ← x̂ + α(ḡ − x̂), ḡ the blend of its clusters' goals (fitted to x̂ by
 //             the Goals phase; summed once per particle group). Reads goals. Writes x; bad. For a
 //             body with one cluster (nothing moves it between here and Velocities) also v as
-//             Velocities forms it, in the same sweep: reads vPred, gravity too, writes v.
+//             Velocities forms it, in the same sweep (v̂ formed from v): reads v, the turn,
+//             gravity too, writes v.
 // WholeBody   bodies with several clusters: one cluster over the whole body, fitted to x and
 //             projected with the body's α, β and mode (cluster_state.h). Writes x; bad.
 // Velocities  v = v̂ + (x − x̂)/h + h·gravity (bodies with one cluster: formed by Project), then

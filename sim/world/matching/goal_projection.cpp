@@ -19,7 +19,8 @@ namespace {
 #endif
 
 // The loop both kernels share: particles [begin, end) toward goal(i, g); with kVelocities also
-// v = (v̂ + (x − x̂)/h) + h·g, x̂ the position before the projection (ProjectedVelocities).
+// v = (v̂ + (x − x̂)/h) + h·g, x̂ the position before the projection, v̂ = v + T·(v − vc)
+// (ProjectedVelocities; the product summed as the prediction sums it, the same bits).
 template <bool kVelocities, typename Goal>
 [[gnu::always_inline]] inline int projectStream(const PositionColumns& p, int begin, int end,
                                                 float alpha, float reach2,
@@ -27,16 +28,23 @@ template <bool kVelocities, typename Goal>
   float* __restrict px = p.x;
   float* __restrict py = p.y;
   float* __restrict pz = p.z;
-  const float* __restrict vp0 = kVelocities ? vel->vPred[0] : nullptr;
-  const float* __restrict vp1 = kVelocities ? vel->vPred[1] : nullptr;
-  const float* __restrict vp2 = kVelocities ? vel->vPred[2] : nullptr;
   float* __restrict v0 = kVelocities ? vel->v[0] : nullptr;
   float* __restrict v1 = kVelocities ? vel->v[1] : nullptr;
   float* __restrict v2 = kVelocities ? vel->v[2] : nullptr;
+  float T[3][3] = {};
+  float uc[3] = {}, f[3] = {};
+  if constexpr (kVelocities)
+    for (int a = 0; a < 3; ++a) {
+      for (int b = 0; b < 3; ++b) T[a][b] = vel->turn[a][b];
+      uc[a] = vel->turnCentre[a];
+      f[a] = vel->fallSpeed[a];
+    }
+  const float T00 = T[0][0], T01 = T[0][1], T02 = T[0][2];
+  const float T10 = T[1][0], T11 = T[1][1], T12 = T[1][2];
+  const float T20 = T[2][0], T21 = T[2][1], T22 = T[2][2];
+  const float ux = uc[0], uy = uc[1], uz = uc[2];
+  const float f0 = f[0], f1 = f[1], f2 = f[2];
   const float invH = kVelocities ? vel->invH : 0.0f;
-  const float f0 = kVelocities ? vel->fallSpeed[0] : 0.0f;
-  const float f1 = kVelocities ? vel->fallSpeed[1] : 0.0f;
-  const float f2 = kVelocities ? vel->fallSpeed[2] : 0.0f;
   int bad = 0;
 #pragma omp simd reduction(| : bad)
   for (int i = begin; i < end; ++i) {
@@ -49,9 +57,11 @@ template <bool kVelocities, typename Goal>
     py[i] = ny;
     pz[i] = nz;
     if constexpr (kVelocities) {
-      v0[i] = (vp0[i] + (nx - ox) * invH) + f0;
-      v1[i] = (vp1[i] + (ny - oy) * invH) + f1;
-      v2[i] = (vp2[i] + (nz - oz) * invH) + f2;
+      const float qx = v0[i], qy = v1[i], qz = v2[i];
+      const float ex = qx - ux, ey = qy - uy, ez = qz - uz;
+      v0[i] = ((qx + (T00 * ex + (T01 * ey + T02 * ez))) + (nx - ox) * invH) + f0;
+      v1[i] = ((qy + (T10 * ex + (T11 * ey + T12 * ez))) + (ny - oy) * invH) + f1;
+      v2[i] = ((qz + (T20 * ex + (T21 * ey + T22 * ez))) + (nz - oz) * invH) + f2;
     }
   }
   return bad;
