@@ -19,6 +19,7 @@
 #include "sim/mesh/closed_surface.h"
 #include "sim/world/body_def.h"
 #include "sim/world/cluster_state.h"
+#include "sim/world/mass_properties.h"
 #include "sim/world/matching/cluster_batch.h"
 #include "sim/world/matching/cluster_rest.h"
 #include "sim/world/matching/particle_groups.h"
@@ -119,6 +120,9 @@ struct BodyState {
   Vec3 spin = Vec3::Zero();
   Eigen::Matrix3f turn = Eigen::Matrix3f::Zero();
   Eigen::Vector3f turnCentre = Eigen::Vector3f::Zero();
+  // Written by Project for a body with one cluster and no pins, read by Velocities: the rigid
+  // motion of the projected positions and velocities, summed block by block as they are formed.
+  RigidMotionSums motion;
 };
 
 // Start positions and velocities, identity plastic state, goals = the rest shape.
