@@ -191,7 +191,8 @@ void World::setSettings(const WorldSettings& s) {
   requireRange("substeps", limits::substeps, s.substeps);
   requireRange("contactFriction", limits::friction, s.contactFriction);
   requireRange("restitutionThreshold", limits::restitutionThreshold, s.restitutionThreshold);
-  // Gravity, friction, restitution, contact or sleep changes can set resting bodies moving.
+  // Gravity, friction, restitution, contact or sleep changes can set resting bodies moving; waking
+  // also restarts the sleep clocks, which do not run while sleep is off (sleep_phase.h).
   const WorldSettings& o = d_->settings;
   const bool same = o.gravity == s.gravity && o.timeStep == s.timeStep &&
                     o.substeps == s.substeps && o.bodyContact == s.bodyContact &&
