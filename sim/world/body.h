@@ -19,6 +19,7 @@
 #include "sim/mesh/closed_surface.h"
 #include "sim/world/body_def.h"
 #include "sim/world/cluster_state.h"
+#include "sim/world/mass_properties.h"
 #include "sim/world/matching/cluster_batch.h"
 #include "sim/world/matching/cluster_rest.h"
 #include "sim/world/matching/particle_groups.h"
@@ -113,12 +114,18 @@ struct BodyState {
   MatX3f v;
   // Per-cluster runtime state: written by Goals and WholeBody (see cluster_state.h).
   ClusterState clusters;
-  // Written by Predict, read by Velocities (vPred also by Project): the predicted positions x̂
-  // and the velocities carried with them (#P×3), and the body's angular momentum about its
-  // centre before the sub-step (kg·m²/s; zero for pinned bodies). xPred is empty for a body with
-  // one cluster: its Project phase forms the velocities, reading x̂ from x (integrate_phase.cpp).
+  // Written by Predict, read by Velocities: the predicted positions x̂ and the velocities carried
+  // with them (#P×3), and the body's angular momentum about its centre before the sub-step
+  // (kg·m²/s; zero for pinned bodies). xPred and vPred are empty for a body with one cluster: its
+  // Project phase forms the velocities, reading x̂ from x and forming v̂ = v + turn·(v −
+  // turnCentre) from v with the prediction's turn (T = R − I, m/s; integrate_phase.cpp).
   MatX3f xPred, vPred;
   Vec3 spin = Vec3::Zero();
+  Eigen::Matrix3f turn = Eigen::Matrix3f::Zero();
+  Eigen::Vector3f turnCentre = Eigen::Vector3f::Zero();
+  // Written by Project for a body with one cluster and no pins, read by Velocities: the rigid
+  // motion of the projected positions and velocities, summed block by block as they are formed.
+  RigidMotionSums motion;
 };
 
 // Start positions and velocities, identity plastic state, goals = the rest shape.

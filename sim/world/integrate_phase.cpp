@@ -46,11 +46,36 @@ constexpr double kMinTurn = 1e-3;
 }
 
 // A body with one cluster has its velocities formed by the Project phase, in the sweep that moves
-// its particles (x̂ is the position that sweep reads: Predict wrote it to x and xPred alike, and
-// nothing moves the body in between); the Velocities phase adds only the spin correction. Saves
-// one sweep over x, x̂, v̂ and v per sub-step (issue 17).
+// its particles (x̂ is the position that sweep reads: Predict wrote it to x, and nothing moves the
+// body in between; v̂ it forms from v, which nothing changes in between either); the Velocities
+// phase adds only the spin correction. Saves one sweep over x, x̂, v̂ and v per sub-step, and the
+// prediction's stores of x̂ and v̂ (issue 17).
 bool velocitiesFromProjection(const BodyModel& m) {
   return m.wholeBodyCluster;
+}
+
+// Such a body, if it keeps its spin (no pins, runVelocitiesPhase), also has the rigid motion of
+// its new positions and velocities, which the spin correction needs, summed by the Project phase:
+// each block (work_layout.cpp, 4,096 particles) as soon as it is projected, its x and v still in
+// the second-level cache. Saves one sweep over x, v and masses from memory per sub-step (issue 17;
+// summing pieces of 512 from the first-level cache measured the same).
+bool motionFromProjection(const BodyModel& m) {
+  return velocitiesFromProjection(m) && m.pinned.empty();
+}
+
+// What the Project phase forms the velocities of a body with one cluster from
+// (velocitiesFromProjection): its v, the prediction's turn, 1/h and h·gravity.
+ProjectedVelocities projectedVelocities(BodyState& s, float invH,
+                                        const Eigen::Vector3f& fallSpeed) {
+  ProjectedVelocities p{};
+  for (int a = 0; a < 3; ++a) {
+    p.v[a] = s.v.col(a).data();
+    for (int b = 0; b < 3; ++b) p.turn[a][b] = s.turn(a, b);
+    p.turnCentre[a] = s.turnCentre[a];
+    p.fallSpeed[a] = fallSpeed[a];
+  }
+  p.invH = invH;
+  return p;
 }
 
 // Moves particles [begin, end) of one body α of the way to the blend of their clusters' goals;
@@ -116,6 +141,16 @@ PointColumns columnsOf(const MatX3f& m) {
   return PointColumns{{m.col(0).data(), m.col(1).data(), m.col(2).data()}};
 }
 
+// Where projectBlock will put particle 0 of a body with one cluster: the projection of a copy.
+std::array<float, 3> projectedFirst(const BodyModel& m, const BodyState& s,
+                                    const BodyParams& params) {
+  std::array<float, 3> p = {s.x(0, 0), s.x(0, 1), s.x(0, 2)};
+  const RestColumns rest{m.rest.col(0).data(), m.rest.col(1).data(), m.rest.col(2).data()};
+  projectOntoTransform(PositionColumns{&p[0], &p[1], &p[2]}, rest, 0, 1, s.clusters.goal(0),
+                       params.mode == Mode::Quadratic, float(params.alpha), m.reach);
+  return p;
+}
+
 // Writable column pointers of a #P×3 array (x, y, z), for the per-particle loops (no Eigen row
 // access, which strides by #P through the column-major array).
 std::array<float*, 3> writableColumns(MatX3f& m) {
@@ -138,9 +173,9 @@ void forParticleRanges(int count, const Body& body) {
 }
 
 // The prediction of particles [begin, end) of one body: x̂ = x + h·v + D·(x − xc) + fall and
-// v̂ = v + T·(v − vc), with D = R − I − h·[ω]× and T = R − I; x takes x̂ too, and xPred a copy
-// unless the body's velocities come from its projection (velocitiesFromProjection: nothing else
-// reads it, and not writing it saves a quarter of the sweep's stores).
+// v̂ = v + T·(v − vc), with D = R − I − h·[ω]× and T = R − I; x takes x̂, and xPred a copy and
+// vPred v̂ unless the body's velocities come from its projection (velocitiesFromProjection:
+// Project forms v̂ itself where it reads v, and not writing them halves the sweep's stores).
 struct PredictStep {
   Eigen::Matrix3f D, T;
   Eigen::Vector3f xc, vc, fall;
@@ -193,10 +228,10 @@ void predictRange(const PredictStep& c, const std::array<float*, 3>& x,
       xp0[i] = mx;
       xp1[i] = my;
       xp2[i] = mz;
+      vp0[i] = qx + (T00 * ex + (T01 * ey + T02 * ez));
+      vp1[i] = qy + (T10 * ex + (T11 * ey + T12 * ez));
+      vp2[i] = qz + (T20 * ex + (T21 * ey + T22 * ez));
     }
-    vp0[i] = qx + (T00 * ex + (T01 * ey + T02 * ez));
-    vp1[i] = qy + (T10 * ex + (T11 * ey + T12 * ez));
-    vp2[i] = qz + (T20 * ex + (T21 * ey + T22 * ez));
   }
 }
 
@@ -262,8 +297,10 @@ void runPredictPhase(const WorkLayout& layout, const Vec3& gravity, double h,
         const PredictStep step{
             toRotation, turnVelocity, rm.centre.cast<float>(), rm.velocity.cast<float>(), fall, hf};
         const bool keepPredicted = !velocitiesFromProjection(m);
-        s.vPred.resize(n, 3);
         s.xPred.resize(keepPredicted ? n : 0, 3);
+        s.vPred.resize(keepPredicted ? n : 0, 3);
+        s.turn = turnVelocity;
+        s.turnCentre = step.vc;
         const std::array<float*, 3> x = writableColumns(s.x), xp = writableColumns(s.xPred),
                                     v = writableColumns(s.v), vp = writableColumns(s.vPred);
         forParticleRanges(n, [&](int begin, int end) {
@@ -295,16 +332,24 @@ void runProjectPhase(const WorkLayout& layout, const Vec3& gravity, double h,
     BodySlot& b = slots[size_t(blk.slot)];
     b.state.clusters.sumGroupGoals(*b.model, b.params.mode == Mode::Quadratic, blk.begin, blk.end);
   });
+  // The sums are taken about the first particle, as rigidMotion takes them: where this sweep will
+  // put it, projected ahead on a copy (the same kernel, the same bits).
+  for (int s : order) {
+    BodySlot& b = slots[size_t(s)];
+    if (motionFromProjection(*b.model))
+      startRigidMotionSums(b.state.motion, projectedFirst(*b.model, b.state, b.params).data(),
+                           b.model->particleCount());
+  }
   parallelFor(static_cast<int>(blocks.size()), minParallel, [&](int i) {
     const ParticleBlock& blk = blocks[size_t(i)];
     BodySlot& b = slots[size_t(blk.slot)];
+    const BodyModel& m = *b.model;
     BodyState& st = b.state;
-    const ProjectedVelocities velocities{
-        {st.vPred.col(0).data(), st.vPred.col(1).data(), st.vPred.col(2).data()},
-        {st.v.col(0).data(), st.v.col(1).data(), st.v.col(2).data()},
-        invH,
-        {fallSpeed.x(), fallSpeed.y(), fallSpeed.z()}};
-    blockBad[size_t(i)] = projectBlock(*b.model, st, b.params, blk.begin, blk.end, velocities);
+    const ProjectedVelocities velocities = projectedVelocities(st, invH, fallSpeed);
+    blockBad[size_t(i)] = projectBlock(m, st, b.params, blk.begin, blk.end, velocities);
+    if (motionFromProjection(m))
+      sumRigidMotionBlocks(columnsOf(st.x), columnsOf(st.v), m.mass.data(), blk.begin, blk.end,
+                           st.motion);
   });
   for (size_t i = 0; i < blocks.size(); ++i)
     if (blockBad[i]) bad[size_t(blocks[i].slot)] = 1;
@@ -354,7 +399,9 @@ void runVelocitiesPhase(const WorkLayout& layout, const Vec3& gravity, double h,
                 // is shorter than its tangent (by sin(hω)/(hω)): put the body's spin back to what
                 // it was before the sub-step.
                 const RigidMotion rm =
-                    rigidMotionOnThreads(columnsOf(s.x), columnsOf(s.v), m.mass.data(), n);
+                    motionFromProjection(m)
+                        ? rigidMotionOf(s.motion)
+                        : rigidMotionOnThreads(columnsOf(s.x), columnsOf(s.v), m.mass.data(), n);
                 const Eigen::Vector3f dw =
                     (rm.inverseInertia * (s.spin - rm.angularMomentum)).cast<float>();
                 if (dw.isZero()) return;

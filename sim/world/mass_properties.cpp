@@ -3,7 +3,9 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
+#include <cassert>
 #include <climits>
+#include <type_traits>
 #include <vector>
 
 #include "sim/base/linalg.h"
@@ -30,17 +32,19 @@ namespace {
 
 // Σw, Σw·d (3), Σw·v (3), Σw·d dᵀ (xx, yy, zz, xy, yz, zx), Σw·d × v (3), d = x − origin.
 using RigidSums = std::array<double, 16>;
+static_assert(std::is_same_v<RigidSums, decltype(RigidMotionSums::blocks)::value_type>);
 
 // The sums over points [b0, b1), at most one block: float sums in eight lanes, added in double.
-// Compiled for x86-64-v3 (AVX2: one register per accumulator of eight lanes; the baseline's
-// sixteen SSE registers hold half of the 32 it needs and it spilled, ~1.2 ns per point, issue
-// 17) and the baseline; the loader picks by CPU. Same bits either way: lane-wise IEEE
+// Compiled for x86-64-v4 (AVX-512VL: 32 registers of eight lanes, so the sixteen accumulators and
+// the terms all stay in registers: ~0.5 ns per point in cache), x86-64-v3 (AVX2: sixteen
+// registers, nine accumulators spilled to the stack: ~1.4 ns; the baseline's SSE pairs ~1.2 ns
+// more, issue 17) and the baseline; the loader picks by CPU. Same bits on each: lane-wise IEEE
 // operations, fixed order, no FMA (tests/sim/test_rigid_motion_targets.cpp builds the baseline
 // alone with SB_MASS_PROPERTIES_BASELINE and compares). With clang (the sanitizer and fuzz
 // builds) the baseline alone, as cluster_batch.cpp: under ThreadSanitizer the loader's CPU
 // check (an ifunc resolver) runs before the sanitizer's runtime and the program crashed at start.
 #if !defined(SB_MASS_PROPERTIES_BASELINE) && !defined(__clang__)
-__attribute__((target_clones("arch=x86-64-v3", "default")))
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
 #endif
 RigidSums
 rigidBlockSums(const PointColumns& x, const PointColumns& v, const float* w, const float origin[3],
@@ -118,18 +122,35 @@ RigidMotion rigidMotion(const PointColumns& x, const PointColumns& v, const floa
   return rigidMotionFromSums(total, origin);
 }
 
+void startRigidMotionSums(RigidMotionSums& sums, const float origin[3], int count) {
+  std::copy(origin, origin + 3, sums.origin);
+  sums.blocks.resize(size_t((count + kRigidMotionBlock - 1) / kRigidMotionBlock));
+}
+
+void sumRigidMotionBlocks(const PointColumns& x, const PointColumns& v, const float* w, int begin,
+                          int end, RigidMotionSums& sums) {
+  assert(begin % kRigidMotionBlock == 0);
+  for (int b0 = begin; b0 < end; b0 += kRigidMotionBlock)
+    sums.blocks[size_t(b0 / kRigidMotionBlock)] =
+        rigidBlockSums(x, v, w, sums.origin, b0, std::min(end, b0 + kRigidMotionBlock));
+}
+
+RigidMotion rigidMotionOf(const RigidMotionSums& sums) {
+  RigidSums total{};
+  for (const RigidSums& block : sums.blocks) addSums(total, block);  // block order: the same bits
+  return rigidMotionFromSums(total, sums.origin);
+}
+
 RigidMotion rigidMotionOnThreads(const PointColumns& x, const PointColumns& v, const float* w,
                                  int count) {
   const float origin[3] = {x.c[0][0], x.c[1][0], x.c[2][0]};
-  const int blocks = (count + kRigidMotionBlock - 1) / kRigidMotionBlock;
-  std::vector<RigidSums> sums(static_cast<size_t>(blocks));
-  parallelFor(blocks, count >= kMinParallelParticles ? 2 : INT32_MAX, [&](int b) {
-    sums[size_t(b)] = rigidBlockSums(x, v, w, origin, b * kRigidMotionBlock,
-                                     std::min(count, (b + 1) * kRigidMotionBlock));
+  RigidMotionSums sums;
+  startRigidMotionSums(sums, origin, count);
+  parallelFor(int(sums.blocks.size()), count >= kMinParallelParticles ? 2 : INT32_MAX, [&](int b) {
+    sumRigidMotionBlocks(x, v, w, b * kRigidMotionBlock,
+                         std::min(count, (b + 1) * kRigidMotionBlock), sums);
   });
-  RigidSums total{};
-  for (const RigidSums& block : sums) addSums(total, block);  // block order: the same bits
-  return rigidMotionFromSums(total, origin);
+  return rigidMotionOf(sums);
 }
 
 Vec3 centreOfMass(const PointColumns& x, const float* mass, int count) {

@@ -4,6 +4,9 @@
 // every sum is formed in double, in point order.
 #pragma once
 
+#include <array>
+#include <vector>
+
 #include "sim/base/types.h"
 
 namespace sb {
@@ -45,6 +48,20 @@ RigidMotion rigidMotion(const PointColumns& x, const PointColumns& v, const floa
 RigidMotion rigidMotionOnThreads(const PointColumns& x, const PointColumns& v, const float* weight,
                                  int count);
 inline constexpr int kRigidMotionBlock = 512;
+
+// The same motion summed where a sweep over the points passes by, block by block: start with the
+// origin (the first point where the sweep will put it), add the blocks of points [begin, end)
+// (whole blocks of kRigidMotionBlock points, a partial one only at the end; any order, any thread)
+// once they are final, then rigidMotionOf adds the blocks in block order: the same bits as
+// rigidMotion.
+struct RigidMotionSums {
+  float origin[3] = {0, 0, 0};
+  std::vector<std::array<double, 16>> blocks;  // per block, see mass_properties.cpp
+};
+void startRigidMotionSums(RigidMotionSums& sums, const float origin[3], int count);
+void sumRigidMotionBlocks(const PointColumns& x, const PointColumns& v, const float* weight,
+                          int begin, int end, RigidMotionSums& sums);
+RigidMotion rigidMotionOf(const RigidMotionSums& sums);
 
 // Σ mᵢ xᵢ / Σ mᵢ (m).
 Vec3 centreOfMass(const PointColumns& x, const float* mass, int count);

@@ -30,6 +30,9 @@ float fastestSquared(const MatX3f& v) {
 bool runSleepPhase(double h, bool enabled, std::vector<BodySlot>& slots,
                    const std::vector<int>& awake, const std::vector<std::pair<int, int>>& touching,
                    const std::vector<char>& held, SleepScratch& scratch) {
+  // With sleep off nothing reads the clocks (turning it on wakes every body, which restarts
+  // them): no pass over the velocities (issue 17).
+  if (!enabled) return false;
   bool candidate = false;
   for (int s : awake) {
     BodySlot& b = slots[size_t(s)];
@@ -42,7 +45,7 @@ bool runSleepPhase(double h, bool enabled, std::vector<BodySlot>& slots,
     }
     candidate = candidate || b.sleep.still >= kTimeToSleep;
   }
-  if (!enabled || !candidate) return false;
+  if (!candidate) return false;
   // Islands of awake bodies: an island sleeps only as a whole.
   std::vector<int>& parent = scratch.parent;
   parent.resize(slots.size());

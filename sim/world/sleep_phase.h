@@ -29,8 +29,9 @@ struct SleepScratch {
 };
 
 // `awake`: the awake slots; `touching`: slot pairs that had a body–body contact this sub-step;
-// `held`: per slot, 1 when a drag holds the body. With `enabled` false only the clocks run.
-// Returns whether some body fell asleep.
+// `held`: per slot, 1 when a drag holds the body. With `enabled` false nothing runs (the clocks
+// restart when it is turned on: World::setSettings wakes every body). Returns whether some body
+// fell asleep.
 bool runSleepPhase(double h, bool enabled, std::vector<BodySlot>& slots,
                    const std::vector<int>& awake, const std::vector<std::pair<int, int>>& touching,
                    const std::vector<char>& held, SleepScratch& scratch);

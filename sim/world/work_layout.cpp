@@ -2,12 +2,16 @@
 
 #include <algorithm>
 
+#include "sim/world/mass_properties.h"
+
 namespace sb {
 
 namespace {
 
 constexpr int kParticlesPerBlock = 4096;          // particles per integration block
 constexpr int kClusteredParticlesPerBlock = 128;  // the same for bodies with several clusters
+// The Project phase sums a body's rigid motion by its blocks (integrate_phase.cpp).
+static_assert(kParticlesPerBlock % kRigidMotionBlock == 0);
 
 // Pieces [0, count) of body `slot` in blocks of `size`.
 void appendBlocks(std::vector<ParticleBlock>& blocks, int slot, int count, int size) {

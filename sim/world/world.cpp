@@ -194,7 +194,8 @@ void World::setSettings(const WorldSettings& s) {
   requireRange("restitutionThreshold", limits::restitutionThreshold, s.restitutionThreshold);
   requireRange("rollingResistance", limits::rollingResistance, s.rollingResistance);
   // Gravity, friction, restitution, rolling resistance, contact or sleep changes can set resting
-  // bodies moving.
+  // bodies moving; waking also restarts the sleep clocks, which do not run while sleep is off
+  // (sleep_phase.h).
   const WorldSettings& o = d_->settings;
   const bool same = o.gravity == s.gravity && o.timeStep == s.timeStep &&
                     o.substeps == s.substeps && o.bodyContact == s.bodyContact &&

@@ -3,6 +3,7 @@
 // bit; a large body stepped at one and two threads (the per-particle passes split inside a body).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <random>
 
@@ -76,6 +77,24 @@ TEST(RigidMotion, OnThreadsHasTheSerialBits) {
       EXPECT_TRUE(sameBits(serial, threaded)) << count << " points, " << threads << " threads";
     }
     setThreadCount(0);
+  }
+}
+
+// Summed where a sweep passes (the Project phase): blocks added in any order, in pieces of
+// several blocks, the last partial; the same bits as the one pass.
+TEST(RigidMotion, SummedByBlocksInAnyOrderHasTheSerialBits) {
+  for (int count : {1, 511, 512, 4097, 10000}) {
+    const Cloud cloud(count, 31 + unsigned(count));
+    const RigidMotion serial =
+        rigidMotion(cloud.positions(), cloud.velocities(), cloud.mass.data(), count);
+    const float origin[3] = {cloud.x[0][0], cloud.x[1][0], cloud.x[2][0]};
+    RigidMotionSums sums;
+    startRigidMotionSums(sums, origin, count);
+    const int piece = 4 * kRigidMotionBlock;
+    for (int begin = (count - 1) / piece * piece; begin >= 0; begin -= piece)
+      sumRigidMotionBlocks(cloud.positions(), cloud.velocities(), cloud.mass.data(), begin,
+                           std::min(count, begin + piece), sums);
+    EXPECT_TRUE(sameBits(serial, rigidMotionOf(sums))) << count << " points";
   }
 }
 

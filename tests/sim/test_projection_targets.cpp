@@ -38,8 +38,8 @@ TEST(ProjectionTargets, BaselineAndDispatchedKernelsGiveTheSameBits) {
   for (int k = 0; k < 18; ++k) T.Q.data()[k] = 0.05f * u(rng);
   T.t = Eigen::Vector3f(0.3f, -0.2f, 0.1f);
   const RestColumns rest{r[0].data(), r[1].data(), r[2].data()};
-  std::vector<float> vPred[3];
-  for (auto& column : vPred)
+  std::vector<float> vStart[3];
+  for (auto& column : vStart)
     for (int i = 0; i < n; ++i) column.push_back(u(rng));
   int compared = 0;
   for (bool quadratic : {false, true})
@@ -49,12 +49,14 @@ TEST(ProjectionTargets, BaselineAndDispatchedKernelsGiveTheSameBits) {
           std::vector<float> a[3] = {start[0], start[1], start[2]};
           std::vector<float> b[3] = {start[0], start[1], start[2]};
           std::vector<float> va[3], vb[3];
-          for (int c = 0; c < 3; ++c) va[c] = vb[c] = std::vector<float>(size_t(n), 0.0f);
+          for (int c = 0; c < 3; ++c) va[c] = vb[c] = vStart[c];
           auto velocities = [&](std::vector<float>* v) {
-            return ProjectedVelocities{{vPred[0].data(), vPred[1].data(), vPred[2].data()},
-                                       {v[0].data(), v[1].data(), v[2].data()},
-                                       60.0f,
-                                       {0.0f, -0.16f, 0.0f}};
+            return ProjectedVelocities{
+                {v[0].data(), v[1].data(), v[2].data()},
+                {{-0.02f, -0.3f, 0.1f}, {0.3f, -0.05f, -0.2f}, {-0.1f, 0.2f, -0.01f}},
+                {0.5f, -1.0f, 0.25f},
+                60.0f,
+                {0.0f, -0.16f, 0.0f}};
           };
           const ProjectedVelocities velA = velocities(va), velB = velocities(vb);
           const int badA = projectOntoTransform(

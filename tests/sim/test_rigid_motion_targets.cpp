@@ -9,6 +9,9 @@
 #define massProperties baselineMassProperties
 #define rigidMotion baselineRigidMotion
 #define rigidMotionOnThreads baselineRigidMotionOnThreads
+#define startRigidMotionSums baselineStartRigidMotionSums
+#define sumRigidMotionBlocks baselineSumRigidMotionBlocks
+#define rigidMotionOf baselineRigidMotionOf
 #define centreOfMass baselineCentreOfMass
 #define linearMomentum baselineLinearMomentum
 // Function-like: RigidMotion has a member of that name, which must keep it.
@@ -17,6 +20,9 @@
 #undef massProperties
 #undef rigidMotion
 #undef rigidMotionOnThreads
+#undef startRigidMotionSums
+#undef sumRigidMotionBlocks
+#undef rigidMotionOf
 #undef centreOfMass
 #undef linearMomentum
 #undef angularMomentum

@@ -84,13 +84,15 @@ int projectRange(const PositionColumns& p, int begin, int end, float alpha, Goal
 }
 
 // The velocities of the particles a projection moves, formed in the same sweep: v = (v̂ + (x −
-// x̂)/h) + h·g with x̂ the position before the projection (docs/design.md §5.3, step 5). #P-long
-// columns; v is written only, v̂ read only.
+// x̂)/h) + h·g with x̂ the position before the projection (docs/design.md §5.3, step 5), and
+// v̂ = v + T·(v − vc) the velocity the prediction carries (step 1), formed here from v rather than
+// stored by the prediction and read back. #P-long columns, v read and written in place.
 struct ProjectedVelocities {
-  const float* vPred[3];  // v̂, m/s
-  float* v[3];            // v, m/s
-  float invH;             // 1/h, 1/s
-  float fallSpeed[3];     // h·gravity, m/s
+  float* v[3];          // v in (as the prediction found it), v out, m/s
+  float turn[3][3];     // T = R − I of the prediction's turn
+  float turnCentre[3];  // vc, m/s
+  float invH;           // 1/h, 1/s
+  float fallSpeed[3];   // h·gravity, m/s
 };
 
 // Particles [begin, end) toward one goal transform g = L·r + t (+ Q·mono(r) when quadratic):
