@@ -61,7 +61,7 @@ SoakResult soak(int steps, unsigned seed, int warmUp, double alphaMin) {
   }
   std::vector<BodyHandle> handles;
   for (const SceneBody& b : scene.bodies) handles.push_back(b.handle);
-  std::mt19937 rng(seed);
+  std::mt19937 rng(seed), rollingRng(seed + 1);
   auto pick = [&](int n) { return std::uniform_int_distribution<int>(0, n - 1)(rng); };
   auto uniform = [&](double lo, double hi) {
     return std::uniform_real_distribution<double>(lo, hi)(rng);
@@ -112,7 +112,11 @@ SoakResult soak(int steps, unsigned seed, int warmUp, double alphaMin) {
       const double gz = uniform(-1, 1), gy = -uniform(5, 15), gx = uniform(-1, 1);
       ws.gravity = Vec3(gx, gy, gz);
       ws.contactFriction = uniform(0, 1.5);
-      ws.rollingResistance = uniform(0, 1);  // the whole documented range
+      // The whole documented range, from a stream of its own: one more draw from `rng` changes
+      // every later action, and the sequence that gave (with or without rolling resistance)
+      // drove the pile into 1,000–2,700 contacts per step from step 12,500, 40× slower
+      // (docs/design.md §5.5, still open); the soak keeps the sequence it has always run.
+      ws.rollingResistance = std::uniform_real_distribution<double>(0, 1)(rollingRng);
       w.setSettings(ws);
     }
     w.step();
