@@ -51,9 +51,11 @@ struct SoftImpact {
 // slowly (it cannot expand without its centre moving away); what it still stores when the hold
 // ends springs back: measured at most 2 % of the impact's energy for e = 0 (docs/design.md §5.5).
 int relaxSubsteps(double alpha);
-// Bodies softer than α ≈ 0.045 store too little stiffness to spring back much; holding them
-// longer kept a body without stiffness (α 0) pressed under a pile of heavy bodies and spread
-// it to 2.9× its size instead of 1.8× (Contact.BodyWithoutStiffnessUnderAPileStaysWithinItsReach).
+// Bodies softer than α ≈ 0.045 store too little stiffness to spring back much, and are not held
+// longer (α 0.01 would be held 459 sub-steps, α 0 for ever). The cap was set when holds still
+// acted in piles: holding longer kept a body without stiffness (α 0) pressed under heavy bodies
+// and spread it to 2.9× its size instead of 1.8× (Contact.BodyWithoutStiffnessUnderAPile-
+// StaysWithinItsReach); a body under a pile touches more than its pair and is now never held.
 inline constexpr int kMaxRelaxSubsteps = 100;
 
 // Advances an impact by one sub-step, given the relative normal velocity of the centres after
