@@ -277,6 +277,9 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
       const int s = order[size_t(k)];
       const BodyState& st = slots[size_t(s)].state;
       ContactScratch::Body& cs = contactScratch[size_t(s)];
+      const bool asleep = slots[size_t(s)].sleep.asleep;
+      if (asleep && cs.boundsWhileAsleep) return;
+      cs.boundsWhileAsleep = asleep;
       const BodyModel& m = *slots[size_t(s)].model;
       cs.box.setEmpty();
       Eigen::Vector3f momentum = Eigen::Vector3f::Zero();

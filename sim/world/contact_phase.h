@@ -57,9 +57,12 @@ struct ContactScratch {
     float maxSpeed = 0;                  // m/s
     Vec3f meanVelocity = Vec3f::Zero();  // m/s, of the centre of mass
     float maxRelativeSpeed = 0;          // m/s, fastest particle relative to the centre of mass
-    bool obstacle = false;               // has a surface and meets some other body this sub-step
-    Eigen::AlignedBox3f region;          // obstacles: bounding box of the probes that meet it
-    bool involved = false;               // meets some other body this sub-step
+    // The box and speeds were taken while the body slept: they hold until it wakes (a sleeping
+    // body does not move), so a resting scene does not sweep its particles every sub-step.
+    bool boundsWhileAsleep = false;
+    bool obstacle = false;       // has a surface and meets some other body this sub-step
+    Eigen::AlignedBox3f region;  // obstacles: bounding box of the probes that meet it
+    bool involved = false;       // meets some other body this sub-step
     SurfaceGrid grid;
     ContactGeometry geometry;  // set up for involved bodies
     // The grid's surface positions and region when it was built, and whose it is (a slot can
@@ -140,6 +143,7 @@ struct ContactScratch {
   void forgetBodies() {
     warm.clear();
     impacts.clear();
+    for (Body& b : bodies) b.boundsWhileAsleep = false;
   }
 };
 

@@ -649,6 +649,81 @@ TEST(Contact, BodyWithoutStiffnessUnderAPileStaysWithinItsReach) {
   EXPECT_GT(lowest, -0.01);  // the floor still holds the pile
 }
 
+// Sleep (docs/design.md §5.5): a resting body falls asleep and then does not move at all; a
+// body dropped on it wakes it (the sleeping body is an obstacle with the bounds it had when it
+// fell asleep) and comes to rest on top instead of passing through; then both sleep again.
+TEST(Sleep, ABodyLandingOnASleepingOneWakesItAndRestsOnIt) {
+  World world = floorWorld();
+  const BodyHandle lower = world.addBody(
+      bodyFrom(onFloorAt(cubeSurface(0.4, 3, Vec3::Zero()), 0.002), "lower", Mode::Rigid, 1.0));
+  int steps = 0;
+  for (; steps < 600 && !world.isSleeping(lower); ++steps) world.step();
+  ASSERT_TRUE(world.isSleeping(lower)) << "not asleep within 10 s";
+  const Eigen::MatrixX3d still = test::toDouble(world.positions(lower));
+  for (int s = 0; s < 60; ++s) world.step();
+  EXPECT_TRUE(world.isSleeping(lower));
+  EXPECT_EQ((test::toDouble(world.positions(lower)) - still).norm(), 0.0);  // not a bit moved
+
+  const double top = still.col(1).maxCoeff();
+  const BodyHandle upper = world.addBody(bodyFrom(
+      onFloorAt(cubeSurface(0.4, 3, Vec3(0.05, 0, 0.03)), top + 0.5), "upper", Mode::Linear, 0.8));
+  bool woke = false;
+  for (int s = 0; s < 240; ++s) {  // 4 s
+    world.step();
+    woke = woke || !world.isSleeping(lower);
+  }
+  EXPECT_TRUE(woke);
+  const double spacing = 0.4 / 3;
+  EXPECT_GT(world.positions(upper).col(1).minCoeff(), top - 0.05 * spacing);  // on top of it
+  EXPECT_NEAR(world.centreOfMass(upper).y(), top + 0.2, 0.02);
+  for (int s = 0; s < 360 && !(world.isSleeping(lower) && world.isSleeping(upper)); ++s)
+    world.step();
+  EXPECT_TRUE(world.isSleeping(lower) && world.isSleeping(upper)) << "not asleep again in 6 s";
+}
+
+// Whatever can move a sleeping body wakes it: a force, new parameters, a settings or collider
+// change, a new state (at once) and a drag (at the next step).
+TEST(Sleep, ForcesParametersSettingsCollidersStatesAndDragsWakeABody) {
+  World world = floorWorld();
+  const BodyHandle b = world.addBody(
+      bodyFrom(onFloorAt(cubeSurface(0.4, 3, Vec3::Zero()), 0.002), "box", Mode::Linear, 0.9));
+  auto sleepNow = [&] {
+    for (int s = 0; s < 900 && !world.isSleeping(b); ++s) world.step();
+    ASSERT_TRUE(world.isSleeping(b));
+  };
+  sleepNow();
+  world.addForce(b, 0, Vec3(0, 1, 0));
+  EXPECT_FALSE(world.isSleeping(b)) << "force";
+  sleepNow();
+  BodyParams p = world.params(b);
+  p.alpha = 0.7;
+  world.setParams(b, p);
+  EXPECT_FALSE(world.isSleeping(b)) << "parameters";
+  sleepNow();
+  WorldSettings ws = world.settings();
+  ws.rollingResistance = 0.1;
+  world.setSettings(ws);
+  EXPECT_FALSE(world.isSleeping(b)) << "settings";
+  sleepNow();
+  world.addCollider(Collider::sphere(Vec3(5, 0, 0), 0.5));
+  EXPECT_FALSE(world.isSleeping(b)) << "collider";
+  sleepNow();
+  world.setState(b, test::toDouble(world.positions(b)),
+                 Eigen::MatrixX3d::Zero(world.particleCount(b), 3));
+  EXPECT_FALSE(world.isSleeping(b)) << "state";
+  sleepNow();
+  DragDef drag;
+  drag.body = b;
+  drag.particles = {0};
+  drag.weights = {1.0};
+  drag.target = world.centreOfMass(b) + Vec3(0, 0.5, 0);
+  drag.stiffness = 0.2;
+  world.addDrag(drag);
+  world.step();
+  EXPECT_FALSE(world.isSleeping(b)) << "drag";
+  EXPECT_GT(world.centreOfMass(b).y(), 0.2);  // and it moves towards the target
+}
+
 // Rolling resistance (docs/design.md §5.5): a rigid ball rolling on the floor slows down by the
 // couple c·ρ·N, as the closed form for a rolling ball says: with I the moment about its rolling
 // axis and R its radius, a = c·g·(ρ/R) / (1 + I/(mR²)), ρ and I recomputed here from the
