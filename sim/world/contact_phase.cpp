@@ -461,7 +461,8 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
 // they are now (the solve's fitted spin is linear about the sub-step's start and, at one-second
 // sub-steps, far from the particles' own), so each couple can only take energy away. Pairs go
 // in key order, each seeing the spin the earlier ones left. Sleeping and pinned bodies take no
-// couple (spin zero and their own spin, respectively, as seen by the other side: zero).
+// couple, and the other side of their pair counts them as not spinning (so a ball on a swinging
+// pinned bar is resisted against its own spin, not against the bar's).
 void resistRolling(ContactScratch& scratch, const std::vector<SolverBody>& bodies,
                    std::vector<BodySlot>& slots, float coefficient, int minParallel) {
   const std::vector<int>& solverSlot = scratch.solverSlot;
