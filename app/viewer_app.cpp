@@ -268,11 +268,10 @@ void ViewerApp::resetSimulation() {
 void ViewerApp::updateMeshes() {
   for (std::size_t i = 0; i < views_.size(); ++i) {
     BodyView& v = views_[i];
-    const bool asleep = scene_.world.isSleeping(scene_.bodies[i].handle);
-    if (asleep && v.currentWhileAsleep) continue;
-    v.currentWhileAsleep = asleep;
+    if (!scene_.refreshRenderVertices(static_cast<int>(i), v.vertices, v.currentWhileAsleep)) {
+      continue;
+    }
     v.uploaded = false;
-    scene_.renderVertices(static_cast<int>(i), v.vertices);
     const auto n = static_cast<std::size_t>(v.vertices.rows());
     // The cage module's normals (area weighted, unit); a vertex no triangle uses gets +y so the
     // shader never normalises a zero vector.

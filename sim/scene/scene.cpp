@@ -612,6 +612,14 @@ void Scene::renderVertices(int body, PointsRowMajor& out) const {
   }
 }
 
+bool Scene::refreshRenderVertices(int body, PointsRowMajor& out, bool& currentWhileAsleep) const {
+  const bool asleep = world.isSleeping(bodies.at(size_t(body)).handle);
+  if (asleep && currentWhileAsleep) return false;
+  renderVertices(body, out);
+  currentWhileAsleep = asleep;
+  return true;
+}
+
 const std::vector<std::array<int, 3>>& Scene::renderTriangles(int body) const {
   const SceneBody& b = bodies.at(size_t(body));
   return b.render ? b.render->triangles : b.cageTriangles;

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <functional>
+#include <memory>
 #include <vector>
 
 #include "sim/scene/scene.h"
@@ -38,8 +39,8 @@ class SceneRunner {
   bool deform_;
   RunTotals totals_;
   std::vector<PointsRowMajor> meshes_;
-  // Per body: its mesh was deformed while it slept (current until it wakes).
-  std::vector<char> currentWhileAsleep_;
+  // Per body: its mesh was deformed while it slept (Scene::refreshRenderVertices).
+  std::unique_ptr<bool[]> currentWhileAsleep_;
 };
 
 }  // namespace sb
