@@ -99,6 +99,7 @@ int runHeadlessCommand(int argc, char** argv) {
   int steps = 0;
   double dt = 0;
   int substeps = 0;
+  double maxSubstep = 0;
   std::string exportDir;
   int every = 1;
   std::string format = "obj";
@@ -113,6 +114,10 @@ int runHeadlessCommand(int argc, char** argv) {
       ->check(inRange(limits::timeStep));
   cli.add_option("--substeps", substeps, "Sub-steps per step (overrides the scene)")
       ->check(inRange(limits::substeps));
+  cli.add_option("--max-substep", maxSubstep,
+                 "Longest sub-step in seconds; longer steps run more sub-steps (overrides the "
+                 "scene's world.maxSubstep, default 1/120)")
+      ->check(inRange(limits::maxSubstep));
   cli.add_option("--export", exportDir, "Write a frame file per exported step into this folder");
   cli.add_option("--every", every, "Export every K-th step (default 1)")
       ->check(CLI::Range(1, 100000000));
@@ -144,6 +149,7 @@ int runHeadlessCommand(int argc, char** argv) {
   WorldSettings settings = scene.world.settings();
   if (dt > 0) settings.timeStep = dt;
   if (substeps > 0) settings.substeps = substeps;
+  if (maxSubstep > 0) settings.maxSubstep = maxSubstep;
   scene.world.setSettings(settings);
 
   const FrameFormat frameFormat = format == "bin" ? FrameFormat::Binary : FrameFormat::Obj;
@@ -164,7 +170,7 @@ int runHeadlessCommand(int argc, char** argv) {
       "%s: %zu bodies, %lld particles, %lld render vertices, dt %.6g s, %d substeps, "
       "%d threads\n",
       scenePath.c_str(), scene.bodies.size(), particles, renderVertices, settings.timeStep,
-      settings.substeps, threadCount());
+      scene.world.substepsFor(settings.timeStep), threadCount());
 
   RunMonitor watch(scene.world);
   int exported = 0;

@@ -152,6 +152,15 @@ void ViewerApp::drawWorldPanel() {
   }
   if (ImGui::SliderInt("substeps", &s.substeps, 1, 20)) changed = true;
   tooltip("Sub-steps per time step: more = stiffer contacts and goals, more cost.");
+  double maxSubstepMs = s.maxSubstep * 1000.0;
+  if (sliderDouble("max sub-step (ms)", &maxSubstepMs, 1.0f, 1000.0f, "%.2f",
+                   "Longest sub-step: a time step longer than substeps x this runs more\n"
+                   "sub-steps. Contacts need short sub-steps (default 8.33 ms); a body on\n"
+                   "its own keeps its shape at any sub-step.",
+                   ImGuiSliderFlags_Logarithmic)) {
+    s.maxSubstep = maxSubstepMs / 1000.0;
+    changed = true;
+  }
   if (ImGui::Checkbox("bodies collide", &s.bodyContact)) changed = true;
   tooltip("Body-body contact: particles are kept out of the other bodies' cages.");
   if (sliderDouble("body friction", &s.contactFriction, 0.0f, 2.0f, "%.2f",

@@ -445,6 +445,7 @@ Scene parseScene(const std::string& text, const std::string& name, const std::st
                             " m/s² long, got " + formatNumber(settings.gravity.norm()));
     settings.timeStep = w.number("timeStep", settings.timeStep, limits::timeStep);
     settings.substeps = w.integer("substeps", settings.substeps, limits::substeps);
+    settings.maxSubstep = w.number("maxSubstep", settings.maxSubstep, limits::maxSubstep);
     settings.bodyContact = w.boolean("bodyContact", settings.bodyContact);
     settings.contactFriction =
         w.number("contactFriction", settings.contactFriction, limits::friction);
@@ -527,6 +528,7 @@ void saveScene(const Scene& scene, const std::string& path) {
   root["world"] = {{"gravity", vec(w.settings().gravity)},
                    {"timeStep", w.settings().timeStep},
                    {"substeps", w.settings().substeps},
+                   {"maxSubstep", w.settings().maxSubstep},
                    {"bodyContact", w.settings().bodyContact},
                    {"contactFriction", w.settings().contactFriction},
                    {"restitutionThreshold", w.settings().restitutionThreshold},

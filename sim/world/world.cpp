@@ -190,6 +190,7 @@ void World::setSettings(const WorldSettings& s) {
                                 formatNumber(limits::gravityNorm.hi) + " m/s² long");
   requireRange("timeStep", limits::timeStep, s.timeStep);
   requireRange("substeps", limits::substeps, s.substeps);
+  requireRange("maxSubstep", limits::maxSubstep, s.maxSubstep);
   requireRange("contactFriction", limits::friction, s.contactFriction);
   requireRange("restitutionThreshold", limits::restitutionThreshold, s.restitutionThreshold);
   requireRange("rollingResistance", limits::rollingResistance, s.rollingResistance);
@@ -198,8 +199,8 @@ void World::setSettings(const WorldSettings& s) {
   // (sleep_phase.h).
   const WorldSettings& o = d_->settings;
   const bool same = o.gravity == s.gravity && o.timeStep == s.timeStep &&
-                    o.substeps == s.substeps && o.bodyContact == s.bodyContact &&
-                    o.contactFriction == s.contactFriction &&
+                    o.substeps == s.substeps && o.maxSubstep == s.maxSubstep &&
+                    o.bodyContact == s.bodyContact && o.contactFriction == s.contactFriction &&
                     o.restitutionThreshold == s.restitutionThreshold &&
                     o.rollingResistance == s.rollingResistance && o.sleep == s.sleep;
   d_->settings = s;
@@ -517,12 +518,19 @@ void World::step() {
 
 void World::step(double dt) {
   requireRange("step: dt", limits::timeStep, dt);
-  const int n = d_->settings.substeps;
+  const int n = substepsFor(dt);
   StepProfile prof;
   for (int i = 0; i < n; ++i) d_->substep(dt / n, prof);
   d_->forces.clear();
   d_->profile = prof;
   d_->time += dt;
+}
+
+int World::substepsFor(double dt) const {
+  const WorldSettings& s = d_->settings;
+  // dt ≤ 10 s and maxSubstep ≥ 1e-4 s bound the count by 1e5.
+  const double needed = std::ceil(dt / s.maxSubstep * (1.0 - 1e-6));
+  return std::max(s.substeps, static_cast<int>(needed));
 }
 
 void World::reset() {

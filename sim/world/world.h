@@ -38,8 +38,19 @@ struct WorldSettings {
   Vec3 gravity = Vec3(0.0, -9.81, 0.0);  // m/s²
   double timeStep = 1.0 / 60.0;          // seconds advanced by step(), [1e-7, 10]
   int substeps = 1;                      // sub-steps per step(), 1 … 1000
-  bool bodyContact = true;               // bodies with a surface keep other bodies out
-  double contactFriction = 0.5;          // μ in [0, 1000] between bodies (as Collider::friction)
+  // Longest sub-step, seconds, [1e-4, 10]: a step whose dt / substeps exceeds it runs
+  // ceil(dt / maxSubstep) equal sub-steps instead (World::substepsFor). Contacts are found
+  // after each sub-step's prediction and solved linearised, which needs bodies to move less
+  // than about a particle spacing per sub-step: at 1 s per sub-step gravity alone predicts
+  // g·h² = 9.8 m, soft piles pass through each other and blow up and friction feeds energy into
+  // soft bodies (docs/design.md §3). The shape-matching update itself is stable at any
+  // sub-step, so 10 (never split) is safe for a body on its own. The default, 1/120 s, is half
+  // Jolt's rule of thumb (one collision step per 1/60 s): at 1/60 s the shipped pile rests with
+  // particles 1.15 spacings inside other bodies and restitution.json's e = 0.9 box never stops
+  // bouncing; at 1/120 s neither happens.
+  double maxSubstep = 1.0 / 120.0;
+  bool bodyContact = true;       // bodies with a surface keep other bodies out
+  double contactFriction = 0.5;  // μ in [0, 1000] between bodies (as Collider::friction)
   // Approach speed (m/s, [0, 1e4]) below which contacts do not bounce whatever their
   // restitution: a resting body's small impacts (gravity's h·g every sub-step) stay inelastic.
   double restitutionThreshold = 1.0;
@@ -147,9 +158,13 @@ class World {
 
   // ---- time ----
   void step();           // advance by settings().timeStep in settings().substeps sub-steps
-  void step(double dt);  // advance by dt seconds ([1e-7, 10]) in settings().substeps sub-steps
-  void reset();          // every body back to its start state; plasticity and drags cleared
-  double time() const;   // seconds simulated since creation or reset
+  void step(double dt);  // advance by dt seconds ([1e-7, 10]) in substepsFor(dt) sub-steps
+  // Sub-steps that step(dt) runs: settings().substeps, or more when dt / substeps is longer
+  // than settings().maxSubstep (to 1e-6 relative, so a dt written as 0.016666667 is one
+  // sub-step of 1/60 s).
+  int substepsFor(double dt) const;
+  void reset();         // every body back to its start state; plasticity and drags cleared
+  double time() const;  // seconds simulated since creation or reset
   const StepProfile& lastProfile() const;  // phases of the last step() call
   int lastContactCount() const;  // body–body contacts that carried load in the last sub-step
   std::vector<WorldEvent> takeEvents();  // returns and clears pending events

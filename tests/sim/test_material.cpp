@@ -154,9 +154,7 @@ TEST(Material, PinnedSoftBarComesToRestHangingFromItsPins) {
 
 // A 1 m cube spinning at 1 rad/s, no gravity, with one step of `dt` seconds per sub-step.
 double growthAtLargeSteps(Mode mode, double beta, double dt, bool gravity) {
-  WorldSettings settings;
-  settings.timeStep = dt;
-  settings.substeps = 1;
+  WorldSettings settings = test::exactSubsteps(dt);
   if (!gravity) settings.gravity = Vec3::Zero();
   World world(settings);
   BodyDef def;

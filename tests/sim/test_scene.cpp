@@ -88,6 +88,8 @@ TEST(Scene, ErrorsNameFileFieldAndReason) {
   expectSceneError(R"({"world": {"sleep": 1}, "bodies": []})", "world.sleep");
   expectSceneError(R"({"world": {"rollingResistance": 2}, "bodies": []})",
                    "world.rollingResistance: must be in [0, 1], got 2");
+  expectSceneError(R"({"world": {"maxSubstep": 0}, "bodies": []})",
+                   "world.maxSubstep: must be in [0.0001, 10], got 0");
   expectSceneError(R"({"bodies": [{"mesh": "/no/such/mesh.obj"}]})",
                    "bodies[0].mesh: /no/such/mesh.obj");
   // A render mesh needs a valid closed cage; a mesh with no faces cannot be one.
@@ -113,6 +115,7 @@ TEST(Scene, SaveRoundTripsParametersAtomically) {
   s.sleep = false;
   s.restitutionThreshold = 0.25;
   s.rollingResistance = 0.125;
+  s.maxSubstep = 0.004;
   scene.world.setSettings(s);
   const fs::path dir = fs::temp_directory_path() / "softbody_save_test" / "sub";
   fs::create_directories(dir);
@@ -130,6 +133,7 @@ TEST(Scene, SaveRoundTripsParametersAtomically) {
   EXPECT_FALSE(back.world.settings().sleep);
   EXPECT_DOUBLE_EQ(back.world.settings().restitutionThreshold, 0.25);
   EXPECT_DOUBLE_EQ(back.world.settings().rollingResistance, 0.125);
+  EXPECT_DOUBLE_EQ(back.world.settings().maxSubstep, 0.004);
   EXPECT_EQ(back.world.clusterCount(back.bodies[1].handle),
             scene.world.clusterCount(scene.bodies[1].handle));
   // A failed save leaves the existing file as it was.

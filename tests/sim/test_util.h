@@ -5,6 +5,7 @@
 #include <random>
 #include <vector>
 
+#include "sim/world/param_ranges.h"
 #include "sim/world/world.h"
 #include "tests/draws.h"
 
@@ -51,11 +52,19 @@ inline double kineticEnergy(const World& w, BodyHandle b) {
   return e;
 }
 
-inline WorldSettings noGravity(double dt = 0.01, int substeps = 1) {
+// Settings whose sub-step is exactly dt / substeps, never split by maxSubstep: what tests of
+// the update itself at long sub-steps need.
+inline WorldSettings exactSubsteps(double dt, int substeps = 1) {
   WorldSettings s;
-  s.gravity = Vec3::Zero();
   s.timeStep = dt;
   s.substeps = substeps;
+  s.maxSubstep = limits::maxSubstep.hi;
+  return s;
+}
+
+inline WorldSettings noGravity(double dt = 0.01, int substeps = 1) {
+  WorldSettings s = exactSubsteps(dt, substeps);
+  s.gravity = Vec3::Zero();
   return s;
 }
 

@@ -54,7 +54,55 @@ TEST(WorldApi, RejectsBadBodiesNamingTheFieldAndStaysUnchanged) {
   s = WorldSettings{};
   s.timeStep = -1;
   expectInvalid([&] { world.setSettings(s); }, "timeStep");
+  for (double badStep : {0.0, 5e-5, 11.0, std::nan("")}) {
+    s = WorldSettings{};
+    s.maxSubstep = badStep;
+    expectInvalid([&] { world.setSettings(s); }, "maxSubstep");
+  }
   expectInvalid([&] { world.step(std::nan("")); }, "dt");
+  EXPECT_EQ(world.stateHash(), before);
+}
+
+// A step longer than substeps × maxSubstep runs ceil(dt / maxSubstep) equal sub-steps: the same
+// bits as asking for that many sub-steps (a body landing on a floor with friction, so gravity,
+// contact and friction all see the sub-step).
+TEST(WorldApi, LongStepsRunSubstepsOfAtMostMaxSubstep) {
+  WorldSettings split;  // maxSubstep 1/120 s by default
+  split.timeStep = 0.1;
+  World world(split);
+  EXPECT_EQ(world.substepsFor(0.1), 12);
+  EXPECT_EQ(world.substepsFor(1.0 / 60), 2);
+  EXPECT_EQ(world.substepsFor(0.016666667), 2);  // as scene files write 1/60
+  EXPECT_EQ(world.substepsFor(1.0 / 120), 1);
+  EXPECT_EQ(world.substepsFor(0.0083333334), 1);
+  EXPECT_EQ(world.substepsFor(0.009), 2);
+  EXPECT_EQ(world.substepsFor(10.0), 1200);
+  split.substeps = 16;
+  world.setSettings(split);
+  EXPECT_EQ(world.substepsFor(0.1), 16);  // more sub-steps than needed are kept
+  split.substeps = 1;
+  world.setSettings(split);
+
+  WorldSettings exact = split;
+  exact.substeps = 12;
+  exact.maxSubstep = limits::maxSubstep.hi;
+  World reference(exact);
+  BodyDef def;
+  def.positions = jitteredGrid(3, 0.5, Vec3(0, 0.6, 0), 3);
+  def.params.mode = Mode::Linear;
+  def.params.alpha = 0.7;
+  for (World* w : {&world, &reference}) {
+    w->addCollider(Collider::plane(Vec3::UnitY(), 0.0, 0.6));
+    w->addBody(def);
+  }
+  for (int step = 0; step < 30; ++step) {
+    world.step();
+    reference.step();
+  }
+  EXPECT_EQ(world.stateHash(), reference.stateHash());
+  EXPECT_DOUBLE_EQ(world.time(), reference.time());
+  EXPECT_GT(world.positions(world.bodies()[0]).col(1).minCoeff(), -0.01);  // it landed
+  EXPECT_LT(world.positions(world.bodies()[0]).col(1).minCoeff(), 0.1);
 }
 
 TEST(WorldApi, HandlesBecomeInvalidWhenBodiesAreRemoved) {
