@@ -215,5 +215,57 @@ TEST(AutoCage, TinyAndHugeScales) {
   checkCage(scaled(bunny, 1e4));
 }
 
+// The message names the field and the reason.
+void expectInvalid(const TriangleMesh& m, const CageOptions& o, const std::string& message) {
+  try {
+    makeCage(m, o);
+    ADD_FAILURE() << "no error; expected " << message;
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+  }
+}
+
+TEST(AutoCage, BadInputIsRefusedByName) {
+  const TriangleMesh box = mesh::testing::makeBox(1, 1, 1);
+  expectInvalid(TriangleMesh{}, {}, "mesh: has no vertices");
+  TriangleMesh nan = box;
+  nan.vertices[3].y() = std::nan("");
+  expectInvalid(nan, {}, "mesh: vertex 3 has a non-finite coordinate");
+  TriangleMesh inf = box;
+  inf.vertices[5].z() = std::numeric_limits<double>::infinity();
+  expectInvalid(inf, {}, "mesh: vertex 5 has a non-finite coordinate");
+  TriangleMesh badIndex = box;
+  badIndex.triangles[2][1] = 99;
+  expectInvalid(badIndex, {}, "mesh: triangle 2 has index 99 outside [0, 8)");
+  TriangleMesh point;
+  point.vertices = {Vec3(1, 2, 3), Vec3(1, 2, 3)};
+  expectInvalid(point, {}, "mesh: all vertices coincide");
+  CageOptions o;
+  o.vertexBudget = 3;
+  expectInvalid(box, o, "vertexBudget: 3 is below 4");
+  o = {};
+  o.tightness = 1.5;
+  expectInvalid(box, o, "tightness: 1.5 is outside [0, 1]");
+  o.tightness = std::nan("");
+  expectInvalid(box, o, "tightness: nan is outside [0, 1]");
+  o = {};
+  o.threads = -1;
+  expectInvalid(box, o, "threads: -1 is negative");
+}
+
+TEST(AutoCage, Deterministic) {
+  const TriangleMesh m = mesh::testing::makeTorus(24, 12);
+  CageOptions o;
+  o.vertexBudget = 80;
+  o.tightness = 0.2;
+  o.threads = 1;
+  const CageResult a = makeCage(m, o);
+  o.threads = 2;
+  const CageResult b = makeCage(m, o);
+  EXPECT_EQ(a.cage.triangles, b.cage.triangles);
+  EXPECT_EQ(a.cage.vertices, b.cage.vertices);
+  EXPECT_EQ(a.report.hausdorff, b.report.hausdorff);
+}
+
 }  // namespace
 }  // namespace sb::cage
