@@ -1,5 +1,6 @@
-// softbody bind / softbody deform: bind a mesh to a cage with mean value coordinates, report
-// the weight statistics, and write a mesh deformed by a moved cage.
+// softbody bind / softbody deform / softbody cage: bind a mesh to a cage with mean value
+// coordinates, report the weight statistics, write a mesh deformed by a moved cage, and make an
+// automatic cage for any mesh.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -13,6 +14,7 @@
 
 #include "app/commands.h"
 #include "sim/base/parallel.h"
+#include "sim/cage/auto_cage.h"
 #include "sim/cage/embedding.h"
 #include "sim/mesh/closed_surface.h"
 #include "sim/mesh/mesh_io.h"
@@ -213,6 +215,49 @@ int runDeformCommand(int argc, char** argv) {
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "deform: %s\n", e.what());
+  }
+  return 1;
+}
+
+int runCageCommand(int argc, char** argv) {
+  CLI::App app{"Make a closed cage that strictly encloses a mesh, within a vertex budget", "cage"};
+  std::string meshPath, outPath;
+  cage::CageOptions options;
+  app.add_option("--mesh", meshPath,
+                 "Mesh to enclose (OBJ, OFF, PLY, STL; soups, holes and pieces are fine)")
+      ->required();
+  app.add_option("--out", outPath, "Output cage (OBJ; replaced only on success)")->required();
+  app.add_option("--vertices", options.vertexBudget, "Most cage vertices (at least 4)");
+  app.add_option("--tightness", options.tightness,
+                 "0 (fast, loose) to 1 (tight, slower): the voxel resolution of the first surface");
+  app.add_option("--threads", options.threads, "Threads for the final checks (0 = all cores)");
+  if (const int rc = parse(app, argc, argv); rc >= 0) return rc;
+
+  try {
+    const TriangleMesh mesh = mesh::readMesh(meshPath);
+    if (options.threads > 0) setThreadCount(options.threads);
+    const cage::CageResult result = cage::makeCage(mesh, options);
+    mesh::writeObj(outPath, result.cage);
+    const cage::CageReport& r = result.report;
+    std::printf("mesh:               %s (%zu vertices, %zu triangles)\n", meshPath.c_str(),
+                mesh.vertices.size(), mesh.triangles.size());
+    std::printf("cage:               %s (%d vertices, %d triangles; budget %d)\n", outPath.c_str(),
+                r.vertices, r.triangles, options.vertexBudget);
+    std::printf("hausdorff:          %.6g (%.2f%% of the diagonal %.6g), cage to mesh\n",
+                r.hausdorff, 100.0 * r.hausdorffRelative, r.diagonal);
+    std::printf("clearance:          >= %.6g (every guard point inside, %d guard points)\n",
+                r.minClearance, r.guardPoints);
+    std::printf("voxels:             %d along the longest side, %d vertices before decimation\n",
+                r.voxelResolution, r.fineVertices);
+    std::printf("time:               %.3f s\n", r.seconds);
+    return 0;
+  } catch (const std::invalid_argument& e) {
+    // makeCage names the field: "mesh: ..." is the input file, the others are options.
+    std::string message = e.what();
+    if (message.rfind("mesh:", 0) == 0) message = meshPath + message.substr(4);
+    std::fprintf(stderr, "cage: %s\n", message.c_str());
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "cage: %s\n", e.what());
   }
   return 1;
 }

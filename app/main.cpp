@@ -1,4 +1,4 @@
-// softbody: the viewer (default), and the headless commands run, bind and deform.
+// softbody: the viewer (default), and the headless commands run, bind, deform and cage.
 #include <cstdio>
 #include <cstring>
 #include <string>
@@ -14,6 +14,7 @@ void printUsage() {
       "  softbody run SCENE --steps N [...]    step a scene headless, export frames, timings\n"
       "  softbody bind --mesh M --cage C [...] bind a mesh to a cage (mean value coordinates)\n"
       "  softbody deform --mesh M --cage C --deformed-cage C2 --out OUT.obj\n"
+      "  softbody cage --mesh M --out C [...]   make a cage that encloses a mesh\n"
       "Run 'softbody COMMAND --help' for the options of a command.\n");
 }
 
@@ -25,6 +26,7 @@ int main(int argc, char** argv) {
     if (first == "run") return sb::app::runHeadlessCommand(argc - 1, argv + 1);
     if (first == "bind") return sb::app::runBindCommand(argc - 1, argv + 1);
     if (first == "deform") return sb::app::runDeformCommand(argc - 1, argv + 1);
+    if (first == "cage") return sb::app::runCageCommand(argc - 1, argv + 1);
     if (first == "help" || first == "-h" || first == "--help") {
       printUsage();
       return 0;

@@ -1,4 +1,4 @@
-// The softbody bind / deform commands, run as a separate process (SOFTBODY_EXE).
+// The softbody bind / deform / cage commands, run as a separate process (SOFTBODY_EXE).
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -13,6 +13,7 @@
 #include <Eigen/Dense>
 
 #include "sim/cage/embedding.h"
+#include "sim/mesh/closed_surface.h"
 #include "sim/mesh/mesh_io.h"
 #include "tests/mesh/mesh_fixtures.h"
 #include "tests/support/temp_dir_test.h"
@@ -158,6 +159,42 @@ TEST_F(Cli, ErrorsAreClearAndNonZero) {
   r = run("deform --help");
   EXPECT_EQ(r.code, 0);
   EXPECT_NE(r.out.find("--deformed-cage"), std::string::npos);
+}
+
+TEST_F(Cli, CageWritesAClosedEnclosingCageAndReports) {
+  const ProcessResult r = run("cage --mesh " + kMeshDir + "/suzanne.obj --out " + path("c.obj") +
+                              " --vertices 120 --tightness 0.2 --threads 2");
+  ASSERT_EQ(r.code, 0) << r.err;
+  for (const char* key : {"cage:", "hausdorff:", "% of the diagonal", "clearance:", "time:"})
+    EXPECT_NE(r.out.find(key), std::string::npos) << key << "\n" << r.out;
+  const TriangleMesh c = readMesh(path("c.obj"));
+  EXPECT_NO_THROW(validateClosedSurface(c, "c.obj"));
+  EXPECT_LE(c.vertices.size(), 120u);
+}
+
+TEST_F(Cli, CageBadInputIsNamedAndLeavesTheOutputUntouched) {
+  write("out.obj", "keep");
+  write("empty.obj", "# no vertices\n");
+  write("nan.obj", "v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n");
+  const std::string suzanne = kMeshDir + "/suzanne.obj";
+  struct Case {
+    std::string args, message;
+  };
+  for (const Case& c : {Case{"--mesh " + path("empty.obj"), path("empty.obj") + ": no vertices"},
+                        Case{"--mesh " + path("nan.obj"), "nan.obj"},
+                        Case{"--mesh " + path("missing.obj"), "missing.obj"},
+                        Case{"--mesh " + suzanne + " --vertices 3", "vertexBudget: 3 is below 4"},
+                        Case{"--mesh " + suzanne + " --tightness 2", "tightness: 2 is outside"}}) {
+    const ProcessResult r = run("cage " + c.args + " --out " + path("out.obj"));
+    EXPECT_EQ(r.code, 1) << c.args;
+    EXPECT_NE(r.err.find(c.message), std::string::npos) << c.args << "\n" << r.err;
+    EXPECT_EQ(contents(path("out.obj")), "keep") << c.args;
+  }
+  const ProcessResult r =
+      run("cage --mesh " + suzanne + " --vertices 60 --tightness 0 --out " + path("no/dir/c.obj"));
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("no/dir/c.obj"), std::string::npos) << r.err;
+  EXPECT_EQ(run("cage --mesh " + suzanne).code, 2);  // --out missing
 }
 
 }  // namespace

