@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "sim/base/file_io.h"
+#include "sim/base/hasher.h"
 #include "sim/cage/embedding.h"
 
 namespace sb::cage {
@@ -20,44 +21,6 @@ using Vec3 = Eigen::Vector3d;
 
 constexpr char kMagic[8] = {'S', 'B', 'M', 'V', 'C', 'W', '0', '1'};
 constexpr std::uint64_t kFormatVersion = 1;
-
-// A 64-bit hash of a byte stream, 8 bytes at a time (not cryptographic; a cache key).
-class Hasher {
- public:
-  explicit Hasher(std::uint64_t seed) : h_(seed ^ 0x9E3779B97F4A7C15ull) {}
-  void bytes(const void* data, std::size_t n) {
-    const auto* p = static_cast<const unsigned char*>(data);
-    std::size_t i = 0;
-    for (; i + 8 <= n; i += 8) {
-      std::uint64_t w;
-      std::memcpy(&w, p + i, 8);
-      mix(w);
-    }
-    std::uint64_t tail = 0;
-    for (std::size_t k = 0; i < n; ++i, ++k) tail |= static_cast<std::uint64_t>(p[i]) << (8 * k);
-    mix(tail ^ (static_cast<std::uint64_t>(n) << 56));
-  }
-  template <class T>
-  void value(const T& v) {
-    bytes(&v, sizeof(T));
-  }
-  std::uint64_t digest() const {
-    std::uint64_t z = h_ + 0x9E3779B97F4A7C15ull;
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-  }
-
- private:
-  void mix(std::uint64_t w) {
-    w *= 0x87C37B91114253D5ull;
-    w = (w << 31) | (w >> 33);
-    w *= 0x4CF5AD432745937Full;
-    h_ ^= w;
-    h_ = ((h_ << 27) | (h_ >> 37)) * 5 + 0x52DCE729;
-  }
-  std::uint64_t h_;
-};
 
 std::uint64_t checksum(const std::string& data) {
   Hasher h(0x5EEDu);
