@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "sim/base/file_io.h"
+#include "sim/cage/cage_cache.h"
 #include "sim/cage/embedding.h"
 #include "sim/mesh/mesh_io.h"
 #include "sim/world/param_ranges.h"
@@ -218,13 +219,50 @@ ClusterDef parseClusters(Fields& f) {
 // one weight matrix (and the deform reads it from cache instead of memory).
 using BoundMeshes = std::map<std::array<std::string, 3>, std::shared_ptr<RenderMesh>>;
 
+// The bounds of a scene's automatic cage settings: makeCage's own (sim/cage/auto_cage.h), and
+// a budget beyond which a cage is no longer coarse.
+constexpr ParamRange kCageVertices{4, 100000};
+constexpr ParamRange kCageTightness{0.0, 1.0};
+
+mesh::TriangleMesh readMeshField(Fields& f, const std::string& field, const std::string& path,
+                                 const std::string& baseDir) {
+  mesh::TriangleMesh m;
+  try {
+    m = mesh::readMesh(resolve(baseDir, path));
+  } catch (const std::exception& e) {
+    f.fail(field, e.what());
+  }
+  if (m.vertices.empty()) f.fail(field, "'" + path + "' has no vertices");
+  return m;
+}
+
 SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMeshes& bound) {
   SceneBody sb;
   const std::string defaultName = "body";
   def.name = f.text("name", &defaultName);
-  sb.meshPath = f.text("mesh", nullptr);
   const std::string none;
-  const std::string renderPath = f.text("renderMesh", &none);
+  if (f.has("cage")) {
+    Fields c(f.raw("cage"), f.where("cage"), f.file());
+    if (!c.has("auto") || !c.boolean("auto", false))
+      c.fail("auto", "must be true (a hand-made cage is given as the body's 'mesh')");
+    AutoCageSettings a;
+    a.vertices = c.integer("vertices", a.vertices, kCageVertices);
+    a.tightness = c.number("tightness", a.tightness, kCageTightness);
+    c.rejectUnknown();
+    sb.autoCage = a;
+  }
+  // With an automatic cage the detailed mesh is named once, as renderMesh or as mesh.
+  std::string renderPath = f.text("renderMesh", &none);
+  if (!sb.autoCage) {
+    sb.meshPath = f.text("mesh", nullptr);
+  } else if (f.has("mesh")) {
+    if (!renderPath.empty())
+      f.fail("cage",
+             "an automatic cage replaces 'mesh'; name the detailed mesh once, as renderMesh");
+    renderPath = f.text("mesh", nullptr);
+  } else if (renderPath.empty()) {
+    f.fail("renderMesh", "is required with an automatic cage (the mesh the cage is made of)");
+  }
   sb.translation = f.vec3("translation", Vec3::Zero());
   sb.rotationDegrees = f.vec3("rotationDegrees", Vec3::Zero(), limits::angleLimit);
   sb.scale = f.number("scale", 1.0, limits::scale);
@@ -267,14 +305,26 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMe
   }
   f.rejectUnknown();
 
-  // Particles: the mesh's vertices, scaled, rotated and placed.
-  mesh::TriangleMesh mesh;
-  try {
-    mesh = mesh::readMesh(resolve(baseDir, sb.meshPath));
-  } catch (const std::exception& e) {
-    f.fail("mesh", e.what());
+  // Particles: the vertices of the mesh file or of the automatic cage, scaled, rotated and placed.
+  mesh::TriangleMesh mesh, detail;
+  std::array<std::string, 3> renderKey{resolve(baseDir, sb.meshPath), resolve(baseDir, renderPath),
+                                       renderPath};
+  if (sb.autoCage) {
+    detail = readMeshField(f, "renderMesh", renderPath, baseDir);
+    cage::CageOptions options;
+    options.vertexBudget = sb.autoCage->vertices;
+    options.tightness = sb.autoCage->tightness;
+    try {
+      // In file coordinates, as the bind: one cage serves every placement of the mesh.
+      mesh = cage::cachedCage(detail, options, cacheDirectory()).cage;
+    } catch (const std::exception& e) {
+      f.fail("cage", "cannot make a cage of '" + renderPath + "': " + e.what());
+    }
+    renderKey[0] = "automatic cage " + std::to_string(options.vertexBudget) + " " +
+                   formatNumber(options.tightness);
+  } else {
+    mesh = readMeshField(f, "mesh", sb.meshPath, baseDir);
   }
-  if (mesh.vertices.empty()) f.fail("mesh", "'" + sb.meshPath + "' has no vertices");
   const Mat3 R = eulerDegrees(sb.rotationDegrees);
   def.positions.clear();
   for (const Vec3& v : mesh.vertices) def.positions.push_back(R * (sb.scale * v) + sb.translation);
@@ -282,17 +332,10 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMe
   // The cage is the body's surface for body–body contact (the World checks it is closed).
   if (sb.contact) def.surface = mesh.triangles;
 
-  const std::array<std::string, 3> renderKey{resolve(baseDir, sb.meshPath),
-                                             resolve(baseDir, renderPath), renderPath};
   if (!renderPath.empty() && bound.count(renderKey)) {
     sb.render = bound.at(renderKey);
   } else if (!renderPath.empty()) {
-    mesh::TriangleMesh detail;
-    try {
-      detail = mesh::readMesh(resolve(baseDir, renderPath));
-    } catch (const std::exception& e) {
-      f.fail("renderMesh", e.what());
-    }
+    if (!sb.autoCage) detail = readMeshField(f, "renderMesh", renderPath, baseDir);
     cage::BindOptions options;
     options.cacheDir = cacheDirectory();
     options.warning = [](const std::string&) {};  // a cache problem only costs a rebind
@@ -567,7 +610,6 @@ void saveScene(const Scene& scene, const std::string& path) {
     if (!w.contains(b.handle)) continue;
     const BodyParams& p = w.params(b.handle);
     json j = {{"name", w.name(b.handle)},
-              {"mesh", rebase(b.meshPath, fromDir, toDir)},
               {"translation", vec(b.translation)},
               {"rotationDegrees", vec(b.rotationDegrees)},
               {"scale", b.scale},
@@ -583,6 +625,12 @@ void saveScene(const Scene& scene, const std::string& path) {
                {{"yield", p.plasticity.yield},
                 {"creep", p.plasticity.creep},
                 {"max", p.plasticity.max}}}};
+    if (b.autoCage) {
+      j["cage"] = {
+          {"auto", true}, {"vertices", b.autoCage->vertices}, {"tightness", b.autoCage->tightness}};
+    } else {
+      j["mesh"] = rebase(b.meshPath, fromDir, toDir);
+    }
     if (b.render) j["renderMesh"] = rebase(b.render->path, fromDir, toDir);
     const ClusterDef& c = w.clusterDef(b.handle);
     json cj = {{"kind", clusterKindName(c.kind)}};

@@ -8,6 +8,7 @@
 
 #include <array>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -34,9 +35,18 @@ struct RenderMesh {
   std::shared_ptr<const cage::Embedding> embedding;  // #mesh vertices × #particles
 };
 
+// "cage": {"auto": true, ...}: the particles are an automatic cage of the render mesh
+// (sim/cage/auto_cage.h), made on load and cached (sim/cage/cage_cache.h).
+struct AutoCageSettings {
+  int vertices = 250;      // most cage vertices, [4, 100000]
+  double tightness = 0.5;  // [0, 1], CageOptions::tightness
+};
+
 struct SceneBody {
   BodyHandle handle;
-  std::string meshPath;  // particles = this mesh's vertices (as written in the file)
+  // Particles = this mesh's vertices (as written in the file); empty with an automatic cage.
+  std::string meshPath;
+  std::optional<AutoCageSettings> autoCage;
   std::vector<std::array<int, 3>> cageTriangles;  // the particle mesh's faces (may be empty)
   std::shared_ptr<RenderMesh> render;             // null when the body has no render mesh
   // The transform and scale applied to the file's vertices, kept so the scene can be saved.

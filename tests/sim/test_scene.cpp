@@ -149,6 +149,100 @@ TEST(Scene, SaveRoundTripsParametersAtomically) {
   EXPECT_EQ(before, after);
 }
 
+// A body that names only a detailed mesh and "cage": {"auto": true}: its particles are the
+// vertices of an automatic cage within the budget (a closed surface: the World accepts it as the
+// body's contact surface), the detailed mesh is its render mesh and reproduces the placed file
+// at rest; the detailed mesh may be named as renderMesh or as mesh; saving writes the cage
+// settings back and no particle mesh; the second load reads the cached cage (same particles).
+TEST(Scene, AutomaticCageFromADetailedMesh) {
+  const fs::path dir = fs::temp_directory_path() / "softbody_auto_cage_scene";
+  fs::remove_all(dir);
+  ::setenv("SOFTBODY_CACHE_DIR", (dir / "cache").c_str(), 1);
+  // The bunny's hand-made cage stands in for a detailed mesh: small, so the test is quick.
+  const std::string detailPath = kAssets + "/meshes/bunny_cage.obj";
+  const std::string placement = R"("translation": [0.5, 1, 0], "rotationDegrees": [0, 30, 0],
+      "scale": 0.2, "mode": "rigid", "alpha": 1)";
+  const std::string text = R"({"bodies": [
+      {"name": "a", "renderMesh": ")" +
+                           detailPath +
+                           R"(", "cage": {"auto": true, "vertices": 60, "tightness": 0},
+       )" + placement + R"(},
+      {"name": "b", "mesh": ")" +
+                           detailPath +
+                           R"(", "cage": {"auto": true, "vertices": 60, "tightness": 0},
+       )" + placement + R"(}]})";
+  const Scene scene = parseScene(text, "auto.json", "");
+  ASSERT_EQ(scene.bodies.size(), 2u);
+  const mesh::TriangleMesh detail = mesh::readMesh(detailPath);
+  const Mat3 R = Eigen::AngleAxisd(30 * M_PI / 180, Vec3::UnitY()).toRotationMatrix();
+  for (const SceneBody& b : scene.bodies) {
+    ASSERT_TRUE(b.autoCage);
+    EXPECT_TRUE(b.meshPath.empty());
+    ASSERT_TRUE(b.render);
+    EXPECT_EQ(b.render->path, detailPath);
+    const int particles = scene.world.particleCount(b.handle);
+    EXPECT_GE(particles, 4);
+    EXPECT_LE(particles, 60);
+    EXPECT_FALSE(b.cageTriangles.empty());
+  }
+  // Both forms give the same cage and share one bind.
+  EXPECT_EQ(scene.bodies[0].render, scene.bodies[1].render);
+  PointsRowMajor rendered;
+  scene.renderVertices(0, rendered);
+  ASSERT_EQ(size_t(rendered.rows()), detail.vertices.size());
+  double worst = 0.0;
+  for (size_t i = 0; i < detail.vertices.size(); ++i) {
+    const Vec3 expected = R * (0.2 * detail.vertices[i]) + Vec3(0.5, 1, 0);
+    worst = std::max(worst,
+                     (rendered.row(Eigen::Index(i)).cast<double>().transpose() - expected).norm());
+  }
+  EXPECT_LT(worst, 1e-5);  // float particles: the placed bunny is ~2 m across
+
+  const std::string path = (dir / "saved.json").string();
+  saveScene(scene, path);
+  const std::string saved = [&] {
+    std::ifstream in(path);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  }();
+  EXPECT_EQ(saved.find("\"mesh\""), std::string::npos) << saved;
+  const Scene back = loadScene(path);  // the second load reads the cached cage
+  ASSERT_EQ(back.bodies.size(), 2u);
+  ASSERT_TRUE(back.bodies[0].autoCage);
+  EXPECT_EQ(back.bodies[0].autoCage->vertices, 60);
+  EXPECT_EQ(back.bodies[0].autoCage->tightness, 0.0);
+  EXPECT_EQ(back.world.positions(back.bodies[0].handle),
+            scene.world.positions(scene.bodies[0].handle));
+  ::unsetenv("SOFTBODY_CACHE_DIR");
+  fs::remove_all(dir);
+}
+
+TEST(Scene, AutomaticCageErrorsNameTheField) {
+  const std::string detail = kAssets + "/meshes/bunny_cage.obj";
+  auto withCage = [&](const std::string& fields) {
+    return R"({"bodies": [{"name": "b", )" + fields + "}]}";
+  };
+  expectSceneError(withCage(R"("renderMesh": ")" + detail + R"(", "cage": {"auto": false})"),
+                   "bodies[0].cage.auto: must be true");
+  expectSceneError(withCage(R"("renderMesh": ")" + detail + R"(", "cage": {})"),
+                   "bodies[0].cage.auto: must be true");
+  expectSceneError(
+      withCage(R"("renderMesh": ")" + detail + R"(", "cage": {"auto": true, "vertices": 3})"),
+      "bodies[0].cage.vertices: must be in [4, 100000], got 3");
+  expectSceneError(
+      withCage(R"("renderMesh": ")" + detail + R"(", "cage": {"auto": true, "tightness": 2})"),
+      "bodies[0].cage.tightness: must be in [0, 1], got 2");
+  expectSceneError(
+      withCage(R"("renderMesh": ")" + detail + R"(", "cage": {"auto": true, "vertex": 9})"),
+      "bodies[0].cage.vertex: unknown field");
+  expectSceneError(withCage(R"("cage": {"auto": true})"),
+                   "bodies[0].renderMesh: is required with an automatic cage");
+  expectSceneError(withCage(R"("mesh": ")" + detail + R"(", "renderMesh": ")" + detail +
+                            R"(", "cage": {"auto": true})"),
+                   "bodies[0].cage: an automatic cage replaces 'mesh'");
+  expectSceneError(withCage(R"("renderMesh": "no_such.obj", "cage": {"auto": true})"),
+                   "bodies[0].renderMesh");
+}
+
 TEST(Scene, RestitutionAndSleepAreReadFromTheFile) {
   const Scene scene = parseScene(
       R"({"world": {"sleep": false, "restitutionThreshold": 0.5, "rollingResistance": 0},

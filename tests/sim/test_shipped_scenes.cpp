@@ -186,8 +186,8 @@ INSTANTIATE_TEST_SUITE_P(Shipped, ShippedScene, ::testing::ValuesIn(shippedScene
 
 TEST(ShippedScenes, IncludeTheDocumentedScenes) {
   const std::vector<std::string> names = shippedSceneNames();
-  for (const char* expected :
-       {"default", "plasticity", "clusters", "pile", "large", "stack", "restitution", "slope"})
+  for (const char* expected : {"default", "plasticity", "clusters", "pile", "large", "stack",
+                               "restitution", "slope", "hands"})
     EXPECT_NE(std::find(names.begin(), names.end(), expected), names.end()) << expected;
 }
 
