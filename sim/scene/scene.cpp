@@ -14,6 +14,8 @@
 #include "sim/base/file_io.h"
 #include "sim/cage/cage_cache.h"
 #include "sim/cage/embedding.h"
+#include "sim/cage/interior_points.h"
+#include "sim/mesh/closed_surface.h"
 #include "sim/mesh/mesh_io.h"
 #include "sim/world/param_ranges.h"
 
@@ -223,6 +225,8 @@ using BoundMeshes = std::map<std::array<std::string, 3>, std::shared_ptr<RenderM
 // a budget beyond which a cage is no longer coarse.
 constexpr ParamRange kCageVertices{4, 100000};
 constexpr ParamRange kCageTightness{0.0, 1.0};
+// Interior lattice spacing, metres (interiorLattice bounds the count).
+constexpr ParamRange kInteriorSpacing{0.0, limits::coordinateLimit};
 
 mesh::TriangleMesh readMeshField(Fields& f, const std::string& field, const std::string& path,
                                  const std::string& baseDir) {
@@ -292,6 +296,12 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMe
     Fields c(f.raw("clusters"), f.where("clusters"), f.file());
     def.clusters = parseClusters(c);
   }
+  if (f.has("interior")) {
+    Fields in(f.raw("interior"), f.where("interior"), f.file());
+    sb.interiorSpacing = in.number("spacing", 0.0, kInteriorSpacing);
+    if (!(sb.interiorSpacing > 0.0)) in.fail("spacing", "is required and must be positive");
+    in.rejectUnknown();
+  }
   if (f.has("pinned")) {
     const json& p = f.raw("pinned");
     if (!p.is_array()) f.fail("pinned", "must be an array of particle indices");
@@ -328,6 +338,17 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMe
   const Mat3 R = eulerDegrees(sb.rotationDegrees);
   def.positions.clear();
   for (const Vec3& v : mesh.vertices) def.positions.push_back(R * (sb.scale * v) + sb.translation);
+  sb.cageVertexCount = static_cast<int>(mesh.vertices.size());
+  if (sb.interiorSpacing > 0.0) {
+    try {
+      mesh::validateClosedSurface(mesh, "the cage");
+      // In file coordinates (the lattice is centred on the cage's box), then placed.
+      for (const Vec3& v : cage::interiorLattice(mesh, sb.interiorSpacing / sb.scale))
+        def.positions.push_back(R * (sb.scale * v) + sb.translation);
+    } catch (const std::exception& e) {
+      f.fail("interior", e.what());
+    }
+  }
   sb.cageTriangles = mesh.triangles;
   // The cage is the body's surface for body–body contact (the World checks it is closed).
   if (sb.contact) def.surface = mesh.triangles;
@@ -632,6 +653,7 @@ void saveScene(const Scene& scene, const std::string& path) {
       j["mesh"] = rebase(b.meshPath, fromDir, toDir);
     }
     if (b.render) j["renderMesh"] = rebase(b.render->path, fromDir, toDir);
+    if (b.interiorSpacing > 0.0) j["interior"] = {{"spacing", b.interiorSpacing}};
     const ClusterDef& c = w.clusterDef(b.handle);
     json cj = {{"kind", clusterKindName(c.kind)}};
     if (c.kind == ClusterDef::Kind::Grid) {
@@ -656,7 +678,7 @@ void Scene::renderVertices(int body, PointsRowMajor& out) const {
   const SceneBody& b = bodies.at(size_t(body));
   const ConstPointsRef particles = world.positions(b.handle);
   if (b.render) {
-    b.render->embedding->deform(particles, out);
+    b.render->embedding->deform(particles.topRows(b.cageVertexCount), out);
   } else {
     out = particles;
   }

@@ -47,6 +47,11 @@ struct SceneBody {
   // Particles = this mesh's vertices (as written in the file); empty with an automatic cage.
   std::string meshPath;
   std::optional<AutoCageSettings> autoCage;
+  // "interior": {"spacing": s}: lattice particles s metres apart inside the cage follow its
+  // vertices (sim/cage/interior_points.h); 0 = none. The particles are the cage's vertices
+  // first, then the interior ones; the render mesh follows the first cageVertexCount.
+  double interiorSpacing = 0.0;
+  int cageVertexCount = 0;
   std::vector<std::array<int, 3>> cageTriangles;  // the particle mesh's faces (may be empty)
   std::shared_ptr<RenderMesh> render;             // null when the body has no render mesh
   // The transform and scale applied to the file's vertices, kept so the scene can be saved.

@@ -166,7 +166,8 @@ TEST(Scene, AutomaticCageFromADetailedMesh) {
       {"name": "a", "renderMesh": ")" +
                            detailPath +
                            R"(", "cage": {"auto": true, "vertices": 60, "tightness": 0},
-       )" + placement + R"(},
+       "interior": {"spacing": 0.25}, )" +
+                           placement + R"(},
       {"name": "b", "mesh": ")" +
                            detailPath +
                            R"(", "cage": {"auto": true, "vertices": 60, "tightness": 0},
@@ -180,11 +181,18 @@ TEST(Scene, AutomaticCageFromADetailedMesh) {
     EXPECT_TRUE(b.meshPath.empty());
     ASSERT_TRUE(b.render);
     EXPECT_EQ(b.render->path, detailPath);
-    const int particles = scene.world.particleCount(b.handle);
-    EXPECT_GE(particles, 4);
-    EXPECT_LE(particles, 60);
+    EXPECT_GE(b.cageVertexCount, 4);
+    EXPECT_LE(b.cageVertexCount, 60);
     EXPECT_FALSE(b.cageTriangles.empty());
   }
+  // Body a also has particles on a 0.25 m lattice inside its cage (the bunny is ~2 m here),
+  // after the cage's vertices; b has the cage's vertices only.
+  const SceneBody &a = scene.bodies[0], &b = scene.bodies[1];
+  EXPECT_EQ(a.cageVertexCount, b.cageVertexCount);
+  EXPECT_EQ(scene.world.particleCount(b.handle), b.cageVertexCount);
+  EXPECT_GT(scene.world.particleCount(a.handle) - a.cageVertexCount, 10);
+  EXPECT_EQ(PointsRowMajor(scene.world.positions(a.handle).topRows(a.cageVertexCount)),
+            PointsRowMajor(scene.world.positions(b.handle)));
   // Both forms give the same cage and share one bind.
   EXPECT_EQ(scene.bodies[0].render, scene.bodies[1].render);
   PointsRowMajor rendered;
@@ -210,6 +218,7 @@ TEST(Scene, AutomaticCageFromADetailedMesh) {
   ASSERT_TRUE(back.bodies[0].autoCage);
   EXPECT_EQ(back.bodies[0].autoCage->vertices, 60);
   EXPECT_EQ(back.bodies[0].autoCage->tightness, 0.0);
+  EXPECT_EQ(back.bodies[0].interiorSpacing, 0.25);
   EXPECT_EQ(back.world.positions(back.bodies[0].handle),
             scene.world.positions(scene.bodies[0].handle));
   ::unsetenv("SOFTBODY_CACHE_DIR");
@@ -241,6 +250,16 @@ TEST(Scene, AutomaticCageErrorsNameTheField) {
                    "bodies[0].cage: an automatic cage replaces 'mesh'");
   expectSceneError(withCage(R"("renderMesh": "no_such.obj", "cage": {"auto": true})"),
                    "bodies[0].renderMesh");
+  const std::string cage = R"("mesh": ")" + detail + R"(", )";
+  expectSceneError(withCage(cage + R"("interior": {"spacing": 0})"),
+                   "bodies[0].interior.spacing: is required and must be positive");
+  expectSceneError(withCage(cage + R"("interior": {})"),
+                   "bodies[0].interior.spacing: is required and must be positive");
+  expectSceneError(withCage(cage + R"("interior": {"spacing": 0.1, "space": 1})"),
+                   "bodies[0].interior.space: unknown field");
+  // Millions of lattice points in the bunny cage's box (~10 m in file units).
+  expectSceneError(withCage(cage + R"("interior": {"spacing": 0.001})"),
+                   "bodies[0].interior: spacing: 0.001");
 }
 
 TEST(Scene, RestitutionAndSleepAreReadFromTheFile) {
