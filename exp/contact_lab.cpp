@@ -133,6 +133,7 @@ void applyWorldOptions(WorldSettings& ws) {
   if (has("ethr")) ws.restitutionThreshold = num("ethr", 1.0);
   if (has("sleep")) ws.sleep = num("sleep", 1) != 0;
   if (has("roll")) ws.rollingResistance = num("roll", 0.05);
+  if (has("maxsub")) ws.maxSubstep = num("maxsub", 1.0 / 120);
 #endif
 }
 

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "sim/cage/auto_cage.h"
 #include "sim/world/world.h"
 
 namespace sb {
@@ -38,8 +39,8 @@ struct RenderMesh {
 // "cage": {"auto": true, ...}: the particles are an automatic cage of the render mesh
 // (sim/cage/auto_cage.h), made on load and cached (sim/cage/cage_cache.h).
 struct AutoCageSettings {
-  int vertices = 250;      // most cage vertices, [4, 100000]
-  double tightness = 0.5;  // [0, 1], CageOptions::tightness
+  int vertices = cage::CageOptions{}.vertexBudget;   // most cage vertices, [4, 100000]
+  double tightness = cage::CageOptions{}.tightness;  // [0, 1], CageOptions::tightness
 };
 
 struct SceneBody {
