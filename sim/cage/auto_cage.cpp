@@ -33,6 +33,9 @@ constexpr int kPad = 4;
 // the guard points kMargin away; collapses keep them kClearance away (both in voxels).
 constexpr double kMargin = 0.25;
 constexpr double kClearance = 0.1;
+// The first limit on the distance of the cage's faces from the guard points (fraction of the
+// bounding-box diagonal), relaxed by the decimation when it blocks the budget.
+constexpr double kFirstDeviation = 0.03;
 // The coarsest resolution tried when the budget is not reached at the requested one.
 constexpr int kMinResolution = 8;
 
@@ -263,7 +266,8 @@ CageResult makeCage(const mesh::TriangleMesh& input, const CageOptions& options)
     mesh::TriangleMesh cage =
         detail::voxelSurface(local, input.triangles, cells, 0.5 * std::sqrt(3.0) + kMargin);
     report.fineVertices = static_cast<int>(cage.vertices.size());
-    detail::decimateCage(cage, guards, options.vertexBudget, kClearance);
+    detail::decimateCage(cage, guards, options.vertexBudget, kClearance,
+                         kFirstDeviation * extent.norm() / h);
     if (static_cast<int>(cage.vertices.size()) > options.vertexBudget &&
         resolution > kMinResolution) {
       resolution = std::max(kMinResolution, resolution * 2 / 3);
