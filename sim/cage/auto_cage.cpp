@@ -123,9 +123,20 @@ double checkEnclosure(const mesh::TriangleMesh& cage, const GuardSet& guards, in
         continue;
       }
       c = std::numeric_limits<double>::infinity();
+      // The ball around the last evaluated point q, of radius its distance to the cage, holds no
+      // cage: points in it share q's winding number and are at least (radius − |x − q|) away.
+      Vec q = Vec::Zero();
+      double radius = 0.0;
       for (int g = bucket.begin; g < bucket.end; ++g) {
         const Vec& x = guards.points[static_cast<std::size_t>(g)];
-        c = std::min(c, distanceTo(cage, x));
+        const double fromQ = (x - q).norm();
+        if (fromQ < radius) {
+          c = std::min(c, radius - fromQ);
+          continue;
+        }
+        q = x;
+        radius = distanceTo(cage, x);
+        c = std::min(c, radius);
         if (!(std::abs(winding(cage, x) - 1.0) < 0.5) && outside[static_cast<std::size_t>(b)] < 0)
           outside[static_cast<std::size_t>(b)] = g;
       }

@@ -381,12 +381,29 @@ class Decimator {
         if (std::abs(windingChange(bucket.centre)) > 0.5) return false;
         continue;
       }
+      // A ball around an evaluated point q that reaches neither fan holds points with q's
+      // (zero) winding change; those at least clearance inside it from its rim need no test.
+      Vec q = Vec::Zero();
+      double radius = 0.0;
       for (int g = bucket.begin; g < bucket.end; ++g) {
         const Vec& x = guards_.points[static_cast<std::size_t>(g)];
         if (!inSwept(x, x)) continue;
-        for (const auto& n : newFan_)
-          if (pointTriangleDistance(x, n[0], n[1], n[2]) < clearance_) return false;
+        if ((x - q).norm() + clearance_ <= radius) continue;
+        double toNew = std::numeric_limits<double>::infinity(), toOld = toNew;
+        for (std::size_t i = 0; i < newFan_.size(); ++i) {
+          toNew = std::min(toNew,
+                           pointTriangleDistance(x, newFan_[i][0], newFan_[i][1], newFan_[i][2]));
+          toOld = std::min(toOld,
+                           pointTriangleDistance(x, oldFan_[i][0], oldFan_[i][1], oldFan_[i][2]));
+        }
+        if (toNew < clearance_) return false;
+        for (const int t : removed_) {
+          const std::array<Vec, 3> c = corners(t);
+          toOld = std::min(toOld, pointTriangleDistance(x, c[0], c[1], c[2]));
+        }
         if (std::abs(windingChange(x)) > 0.5) return false;
+        q = x;
+        radius = std::min(toNew, toOld);
       }
     }
     return true;
