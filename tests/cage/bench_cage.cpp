@@ -254,9 +254,10 @@ TriangleMesh subdivided(const TriangleMesh& m, int levels) {
   return out;
 }
 
-void runAutoCage(benchmark::State& state, const TriangleMesh& m, int budget) {
+void runAutoCage(benchmark::State& state, const TriangleMesh& m, int budget, double tightness) {
   CageOptions o;
   o.vertexBudget = budget;
+  o.tightness = tightness;
   CageReport report;
   for (auto _ : state) report = makeCage(m, o).report;
   state.counters["triangles"] = static_cast<double>(m.triangles.size());
@@ -264,17 +265,26 @@ void runAutoCage(benchmark::State& state, const TriangleMesh& m, int budget) {
   state.counters["hausdorff_pct"] = 100.0 * report.hausdorffRelative;
 }
 
-// The bunny (3,674 triangles) subdivided 1, 3 and 4 times: 14.7k, 235k and 940k triangles.
+// The bunny (3,674 triangles) subdivided 1, 3 and 4 times: 14.7k, 235k and 940k triangles;
+// second argument: tightness in tenths.
 void BM_AutoCageVsTriangles(benchmark::State& state) {
   const TriangleMesh m = subdivided(readMesh(std::string(SOFTBODY_TEST_MESH_DIR) + "/bunny.obj"),
                                     static_cast<int>(state.range(0)));
-  runAutoCage(state, m, 250);
+  runAutoCage(state, m, 250, 0.1 * static_cast<double>(state.range(1)));
 }
-BENCHMARK(BM_AutoCageVsTriangles)->Arg(1)->Arg(3)->Arg(4)->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK(BM_AutoCageVsTriangles)
+    ->Args({1, 2})
+    ->Args({1, 5})
+    ->Args({3, 2})
+    ->Args({3, 5})
+    ->Args({4, 2})
+    ->Args({4, 5})
+    ->Unit(benchmark::kSecond)
+    ->Iterations(1);
 
 void BM_AutoCageVsBudget(benchmark::State& state) {
   const TriangleMesh m = readMesh(std::string(SOFTBODY_TEST_MESH_DIR) + "/bunny.obj");
-  runAutoCage(state, m, static_cast<int>(state.range(0)));
+  runAutoCage(state, m, static_cast<int>(state.range(0)), CageOptions{}.tightness);
 }
 BENCHMARK(BM_AutoCageVsBudget)
     ->Arg(100)
