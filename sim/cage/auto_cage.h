@@ -23,8 +23,9 @@
 namespace sb::cage {
 
 struct CageOptions {
-  // Most cage vertices (≥ 4). The cage has at most this many; it may have fewer when no further
-  // collapse keeps every guard point inside.
+  // Most cage vertices (≥ 4). When the budget cannot be reached even from the coarsest voxels
+  // (8 along the longest side) — a budget of a few vertices (suzanne stops at 11 for a budget of
+  // 4), or a shape of higher genus — the cage has more: compare CageReport::vertices.
   int vertexBudget = 250;
   // In [0, 1]: the voxel resolution of the first, fine enclosing surface, from 24 voxels along the
   // longest side of the bounding box (0: fast, loose) to 128 (1: tight, slower); 0.2 gives 45.

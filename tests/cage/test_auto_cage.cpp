@@ -285,6 +285,20 @@ TEST(AutoCage, TinyAndHugeScales) {
   }
 }
 
+// A budget too small to reach: the cage keeps every guarantee and says how many vertices it has.
+TEST(AutoCage, UnreachableBudgetKeepsTheGuaranteesAndReportsTheCount) {
+  CageOptions o;
+  o.vertexBudget = 4;
+  o.tightness = 0.0;  // every coarser resolution is tried: start from the coarsest default
+  const TriangleMesh torus = mesh::testing::makeTorus(24, 12);
+  const CageResult r = makeCage(torus, o);
+  EXPECT_GT(r.report.vertices, 4);
+  EXPECT_EQ(r.report.vertices, static_cast<int>(r.cage.vertices.size()));
+  EXPECT_NO_THROW(mesh::validateClosedSurface(r.cage, "cage"));
+  EXPECT_EQ(countIntersections(r.cage), 0);
+  for (const Vec3& p : probePoints(torus)) EXPECT_NEAR(windingNumber(r.cage, p), 1.0, 1e-6);
+}
+
 // The message names the field and the reason.
 void expectInvalid(const TriangleMesh& m, const CageOptions& o, const std::string& message) {
   try {
