@@ -191,6 +191,11 @@ class TriangleIndex {
             if (std::max({std::abs(x - c[0]), std::abs(y - c[1]), std::abs(z - c[2])}) != s)
               continue;
             if (x < 0 || y < 0 || z < 0 || x >= n_[0] || y >= n_[1] || z >= n_[2]) continue;
+            // A triangle's closest point lies in one of its cells, so a cell no nearer than the
+            // best distance so far cannot improve it.
+            const Vec cellLo = kCell * Vec(x, y, z);
+            if ((p - p.cwiseMax(cellLo).cwiseMin(cellLo + Vec::Constant(kCell))).norm() >= best)
+              continue;
             const std::size_t cell = index(x, y, z);
             for (int i = start_[cell]; i < start_[cell + 1]; ++i) {
               const Tri& t = t_[static_cast<std::size_t>(items_[static_cast<std::size_t>(i)])];
