@@ -250,6 +250,11 @@ int runCageCommand(int argc, char** argv) {
     std::printf("voxels:             %d along the longest side, %d vertices before decimation\n",
                 r.voxelResolution, r.fineVertices);
     std::printf("time:               %.3f s\n", r.seconds);
+    if (r.vertices > options.vertexBudget)
+      std::fprintf(stderr,
+                   "cage: warning: %d vertices, over the budget of %d (the fewest the "
+                   "enclosure allows from the coarsest voxels)\n",
+                   r.vertices, options.vertexBudget);
     return 0;
   } catch (const std::invalid_argument& e) {
     // makeCage names the field: "mesh: ..." is the input file, the others are options.

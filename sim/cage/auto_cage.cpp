@@ -33,6 +33,9 @@ constexpr int kPad = 4;
 // the guard points kMargin away; collapses keep them kClearance away (both in voxels).
 constexpr double kMargin = 0.25;
 constexpr double kClearance = 0.1;
+// The first limit on the distance of the cage's faces from the guard points (fraction of the
+// bounding-box diagonal), relaxed by the decimation when it blocks the budget.
+constexpr double kFirstDeviation = 0.03;
 // The coarsest resolution tried when the budget is not reached at the requested one.
 constexpr int kMinResolution = 8;
 
@@ -120,9 +123,20 @@ double checkEnclosure(const mesh::TriangleMesh& cage, const GuardSet& guards, in
         continue;
       }
       c = std::numeric_limits<double>::infinity();
+      // The ball around the last evaluated point q, of radius its distance to the cage, holds no
+      // cage: points in it share q's winding number and are at least (radius − |x − q|) away.
+      Vec q = Vec::Zero();
+      double radius = 0.0;
       for (int g = bucket.begin; g < bucket.end; ++g) {
         const Vec& x = guards.points[static_cast<std::size_t>(g)];
-        c = std::min(c, distanceTo(cage, x));
+        const double fromQ = (x - q).norm();
+        if (fromQ < radius) {
+          c = std::min(c, radius - fromQ);
+          continue;
+        }
+        q = x;
+        radius = distanceTo(cage, x);
+        c = std::min(c, radius);
         if (!(std::abs(winding(cage, x) - 1.0) < 0.5) && outside[static_cast<std::size_t>(b)] < 0)
           outside[static_cast<std::size_t>(b)] = g;
       }
@@ -177,6 +191,11 @@ class TriangleIndex {
             if (std::max({std::abs(x - c[0]), std::abs(y - c[1]), std::abs(z - c[2])}) != s)
               continue;
             if (x < 0 || y < 0 || z < 0 || x >= n_[0] || y >= n_[1] || z >= n_[2]) continue;
+            // A triangle's closest point lies in one of its cells, so a cell no nearer than the
+            // best distance so far cannot improve it.
+            const Vec cellLo = kCell * Vec(x, y, z);
+            if ((p - p.cwiseMax(cellLo).cwiseMin(cellLo + Vec::Constant(kCell))).norm() >= best)
+              continue;
             const std::size_t cell = index(x, y, z);
             for (int i = start_[cell]; i < start_[cell + 1]; ++i) {
               const Tri& t = t_[static_cast<std::size_t>(items_[static_cast<std::size_t>(i)])];
@@ -263,7 +282,8 @@ CageResult makeCage(const mesh::TriangleMesh& input, const CageOptions& options)
     mesh::TriangleMesh cage =
         detail::voxelSurface(local, input.triangles, cells, 0.5 * std::sqrt(3.0) + kMargin);
     report.fineVertices = static_cast<int>(cage.vertices.size());
-    detail::decimateCage(cage, guards, options.vertexBudget, kClearance);
+    detail::decimateCage(cage, guards, options.vertexBudget, kClearance,
+                         kFirstDeviation * extent.norm() / h);
     if (static_cast<int>(cage.vertices.size()) > options.vertexBudget &&
         resolution > kMinResolution) {
       resolution = std::max(kMinResolution, resolution * 2 / 3);

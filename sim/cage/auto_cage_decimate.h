@@ -15,8 +15,12 @@ namespace sb::cage::detail {
 //      Σ of the old fan) / 4π, which must be 0 for each guard point near the one-ring;
 //  (b) no new triangle intersects another cage triangle;
 //  (c) the link condition holds (the surface stays 2-manifold);
-//  (d) no new triangle flips against its old self or is a sliver.
-// So the result keeps all the invariants above. Deterministic.
-void decimateCage(mesh::TriangleMesh& cage, const GuardSet& guards, int budget, double clearance);
+//  (d) no new triangle flips against its old self or is a sliver;
+//  (e) samples on the new triangles lie within maxDeviation of a guard point (a bound on the
+//      Hausdorff distance cage → mesh; relaxed ×1.5 whenever a whole pass makes no collapse,
+//      dropped after 12 relaxations).
+// So the result keeps the invariants (a)–(d). Deterministic.
+void decimateCage(mesh::TriangleMesh& cage, const GuardSet& guards, int budget, double clearance,
+                  double maxDeviation);
 
 }  // namespace sb::cage::detail

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "sim/mesh/closest_point.h"
 
@@ -77,6 +78,20 @@ bool anyEdgeMeets(const std::array<Vec, 3>& t, const std::array<Vec, 3>& u) {
   return false;
 }
 
+// All corners of u strictly on one side of t's plane, beyond rounding (the cheap early out).
+bool strictlyOneSide(const std::array<Vec, 3>& t, const std::array<Vec, 3>& u) {
+  const Vec n = (t[1] - t[0]).cross(t[2] - t[0]);
+  const double size = (t[1] - t[0]).norm() + (t[2] - t[0]).norm();
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const Vec& x : u) {
+    const double s = n.dot(x - t[0]);
+    const double tolerance = 1e-9 * n.norm() * (size + (x - t[0]).norm());
+    lo = std::min(lo, s - tolerance);
+    hi = std::max(hi, s + tolerance);
+  }
+  return lo > 0 || hi < 0;
+}
+
 }  // namespace
 
 double solidAngle(const Vec& p, const Vec& a, const Vec& b, const Vec& c) {
@@ -102,7 +117,9 @@ bool trianglesIntersect(const std::array<Vec, 3>& t, const Tri& tIds, const std:
         ti = i;
         uj = j;
       }
-  if (shared == 0) return anyEdgeMeets(t, u) || anyEdgeMeets(u, t);
+  if (shared == 0)
+    return !strictlyOneSide(t, u) && !strictlyOneSide(u, t) &&
+           (anyEdgeMeets(t, u) || anyEdgeMeets(u, t));
   if (shared == 1) {
     // Non-coplanar triangles meeting in a corner can only cross along a segment from that
     // corner, which leaves one of them through its opposite edge.

@@ -1,17 +1,23 @@
 // Benchmarks of the cage deformer (run by hand, Release build; not a CTest test):
 //   bench_cage --benchmark_filter=Bind     ns per cage triangle per query point, 1 and 2 threads
 //   bench_cage --benchmark_filter=Deform   ms per frame for 100k vertices, dense and pruned
+//   bench_cage --benchmark_filter=AutoCage automatic cages: time and Hausdorff distance (% of the
+//                                          diagonal) vs input triangles and vs vertex budget
 #include <benchmark/benchmark.h>
 #include <omp.h>
 
 #include "sim/base/parallel.h"
 
+#include <algorithm>
 #include <cmath>
+#include <map>
 #include <memory>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "sim/cage/auto_cage.h"
 #include "sim/cage/embedding.h"
 #include "sim/cage/mvc.h"
 #include "sim/mesh/mesh_io.h"
@@ -221,6 +227,72 @@ void BM_Normals(benchmark::State& state) {
   state.counters["vertices"] = static_cast<double>(mesh.vertices.size());
 }
 BENCHMARK(BM_Normals)->Unit(benchmark::kMicrosecond);
+
+// Splits every triangle into four at its edge midpoints (the shape stays the same).
+TriangleMesh subdivided(const TriangleMesh& m, int levels) {
+  TriangleMesh out = m;
+  for (int l = 0; l < levels; ++l) {
+    TriangleMesh next;
+    next.vertices = out.vertices;
+    std::map<std::pair<int, int>, int> mid;
+    const auto midpoint = [&](int a, int b) {
+      const auto key = std::minmax(a, b);
+      const auto it = mid.find(key);
+      if (it != mid.end()) return it->second;
+      next.vertices.push_back(0.5 * (out.vertices[std::size_t(a)] + out.vertices[std::size_t(b)]));
+      return mid[key] = static_cast<int>(next.vertices.size()) - 1;
+    };
+    for (const auto& t : out.triangles) {
+      const int ab = midpoint(t[0], t[1]), bc = midpoint(t[1], t[2]), ca = midpoint(t[2], t[0]);
+      next.triangles.push_back({t[0], ab, ca});
+      next.triangles.push_back({ab, t[1], bc});
+      next.triangles.push_back({ca, bc, t[2]});
+      next.triangles.push_back({ab, bc, ca});
+    }
+    out = std::move(next);
+  }
+  return out;
+}
+
+void runAutoCage(benchmark::State& state, const TriangleMesh& m, int budget, double tightness) {
+  CageOptions o;
+  o.vertexBudget = budget;
+  o.tightness = tightness;
+  CageReport report;
+  for (auto _ : state) report = makeCage(m, o).report;
+  state.counters["triangles"] = static_cast<double>(m.triangles.size());
+  state.counters["cage_vertices"] = report.vertices;
+  state.counters["hausdorff_pct"] = 100.0 * report.hausdorffRelative;
+}
+
+// The bunny (3,674 triangles) subdivided 1, 3 and 4 times: 14.7k, 235k and 940k triangles;
+// second argument: tightness in tenths.
+void BM_AutoCageVsTriangles(benchmark::State& state) {
+  const TriangleMesh m = subdivided(readMesh(std::string(SOFTBODY_TEST_MESH_DIR) + "/bunny.obj"),
+                                    static_cast<int>(state.range(0)));
+  runAutoCage(state, m, 250, 0.1 * static_cast<double>(state.range(1)));
+}
+BENCHMARK(BM_AutoCageVsTriangles)
+    ->Args({1, 2})
+    ->Args({1, 5})
+    ->Args({3, 2})
+    ->Args({3, 5})
+    ->Args({4, 2})
+    ->Args({4, 5})
+    ->Unit(benchmark::kSecond)
+    ->Iterations(1);
+
+void BM_AutoCageVsBudget(benchmark::State& state) {
+  const TriangleMesh m = readMesh(std::string(SOFTBODY_TEST_MESH_DIR) + "/bunny.obj");
+  runAutoCage(state, m, static_cast<int>(state.range(0)), CageOptions{}.tightness);
+}
+BENCHMARK(BM_AutoCageVsBudget)
+    ->Arg(100)
+    ->Arg(250)
+    ->Arg(500)
+    ->Arg(1000)
+    ->Unit(benchmark::kSecond)
+    ->Iterations(1);
 
 }  // namespace
 

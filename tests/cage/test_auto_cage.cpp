@@ -1,6 +1,6 @@
 // Automatic cages (sim/cage/auto_cage.h) on the shipped meshes and on generated shapes (torus,
 // thin plate, two disjoint spheres, a sphere with a hole, a self-intersecting union of two boxes,
-// 1e-4 and 1e4 scaled copies): every vertex of the input and samples on its triangles inside by
+// 1e-4 and 1e4 scaled copies): every vertex of the input and 3 points in each triangle inside by
 // generalised winding number (computed here, independently), closed and manifold, no
 // triangle–triangle intersection (brute force, independent), budget held, Hausdorff bounded,
 // and a mean value bind to the cage reproduces the mesh at rest. Bad input is refused by name.
@@ -119,13 +119,15 @@ std::vector<Vec3> probePoints(const TriangleMesh& m) {
 
 struct Expect {
   int budget = 250;
-  double maxHausdorff = 0.06;  // relative to the diagonal
+  double maxHausdorff = 0.05;  // relative to the diagonal
+  double tightness = CageOptions{}.tightness;
 };
 
 // All the properties of a cage of m; returns the report.
 CageReport checkCage(const TriangleMesh& m, const Expect& e = {}) {
   CageOptions o;
   o.vertexBudget = e.budget;
+  o.tightness = e.tightness;
   const CageResult r = makeCage(m, o);
   const TriangleMesh& cage = r.cage;
   const double diag = diagonal(m);
@@ -188,20 +190,31 @@ TriangleMesh scaled(TriangleMesh m, double s) {
 }
 
 TEST(AutoCage, ShippedMeshes) {
-  for (const char* name : {"bunny.obj", "hand.obj", "suzanne.obj", "bar_cage.obj", "bunny_cage.obj",
-                           "suzanne_cage.obj"}) {
+  for (const char* name : {"bunny.obj", "hand.obj", "suzanne.obj", "bar_cage.obj", "box_cage.obj",
+                           "bunny_cage.obj", "suzanne_cage.obj"}) {
     SCOPED_TRACE(name);
     std::printf("%s\n", name);
     checkCage(shipped(name));
   }
 }
 
+TEST(AutoCage, BunnyAtFinerVoxels) {
+  Expect e;
+  e.tightness = 0.5;
+  checkCage(shipped("bunny.obj"), e);
+}
+
 TEST(AutoCage, Torus) {
   checkCage(mesh::testing::makeTorus(48, 24));
 }
 
+// Large flat faces make many coplanar triangle pairs to test: the slowest input (15 s at tightness
+// 0.5, 7-10 s at the default 0.2), so at tightness 0 here (24 voxels: 5.1 % Hausdorff).
 TEST(AutoCage, ThinPlate) {
-  checkCage(mesh::testing::makeBox(8, 8, 1, Vec3(1, 1, 0.004)));
+  Expect e;
+  e.tightness = 0.0;
+  e.maxHausdorff = 0.06;
+  checkCage(mesh::testing::makeBox(8, 8, 1, Vec3(1, 1, 0.004)), e);
 }
 
 TEST(AutoCage, TwoDisjointSpheres) {
@@ -209,10 +222,81 @@ TEST(AutoCage, TwoDisjointSpheres) {
                    mesh::testing::makeIcosphere(3, 0.5, Vec3(0.6, 0, 0))));
 }
 
+// An open sphere: the exterior floods in through the hole, so the voxel solid is a shell; at 250
+// vertices the cage closes the hole instead, and the Hausdorff distance is then about the hole's
+// radius (0.3 here: 9 % of the diagonal).
+TEST(AutoCage, SphereWithHole) {
+  TriangleMesh m = mesh::testing::makeIcosphere(3);
+  std::vector<std::array<int, 3>> kept;
+  for (const auto& t : m.triangles) {
+    const Vec3 centroid = (m.vertices[std::size_t(t[0])] + m.vertices[std::size_t(t[1])] +
+                           m.vertices[std::size_t(t[2])]) /
+                          3.0;
+    if (centroid.z() < 0.95) kept.push_back(t);
+  }
+  ASSERT_LT(kept.size(), m.triangles.size());
+  m.triangles = kept;
+  Expect e;
+  e.maxHausdorff = 0.12;
+  checkCage(m, e);
+}
+
+TEST(AutoCage, SelfIntersectingUnionOfTwoBoxes) {
+  checkCage(merged(mesh::testing::makeBox(2, 2, 2),
+                   mesh::testing::makeBox(2, 2, 2, Vec3(1, 1, 1), Vec3(0.5, 0.4, 0.3))));
+}
+
+// A triangle soup: every triangle with corners of its own (nothing shared, nothing closed), and
+// a single open sheet of zero thickness.
+TEST(AutoCage, TriangleSoupAndOpenSheet) {
+  const TriangleMesh suzanne = shipped("suzanne.obj");
+  TriangleMesh soup;
+  for (const auto& t : suzanne.triangles) {
+    const int base = static_cast<int>(soup.vertices.size());
+    for (const int v : t) soup.vertices.push_back(suzanne.vertices[std::size_t(v)]);
+    soup.triangles.push_back({base, base + 1, base + 2});
+  }
+  checkCage(soup);
+  TriangleMesh sheet = mesh::testing::makeBox(6, 6, 1, Vec3(1, 1, 0.1));
+  std::vector<std::array<int, 3>> top;
+  for (const auto& t : sheet.triangles)
+    if (sheet.vertices[std::size_t(t[0])].z() > 0.05 &&
+        sheet.vertices[std::size_t(t[1])].z() > 0.05 &&
+        sheet.vertices[std::size_t(t[2])].z() > 0.05)
+      top.push_back(t);
+  sheet.triangles = top;
+  // Known weakness: the slab around a sheet of zero thickness decimates badly (8.6 %; the closed
+  // thin plate gives 2.7 % at this tightness).
+  Expect e;
+  e.maxHausdorff = 0.1;
+  checkCage(sheet, e);
+}
+
+// The voxel frame is relative to the bounding box: the same shape at 1e-4 and 1e4 gives the same
+// cage, scaled.
 TEST(AutoCage, TinyAndHugeScales) {
-  const TriangleMesh bunny = shipped("bunny.obj");
-  checkCage(scaled(bunny, 1e-4));
-  checkCage(scaled(bunny, 1e4));
+  const TriangleMesh suzanne = shipped("suzanne.obj");
+  const CageReport unit = checkCage(suzanne);
+  for (const double scale : {1e-4, 1e4}) {
+    SCOPED_TRACE(scale);
+    const CageReport r = checkCage(scaled(suzanne, scale));
+    EXPECT_EQ(r.vertices, unit.vertices);
+    EXPECT_NEAR(r.hausdorffRelative, unit.hausdorffRelative, 1e-9);
+  }
+}
+
+// A budget too small to reach: the cage keeps every guarantee and says how many vertices it has.
+TEST(AutoCage, UnreachableBudgetKeepsTheGuaranteesAndReportsTheCount) {
+  CageOptions o;
+  o.vertexBudget = 4;
+  o.tightness = 0.0;  // every coarser resolution is tried: start from the coarsest default
+  const TriangleMesh torus = mesh::testing::makeTorus(24, 12);
+  const CageResult r = makeCage(torus, o);
+  EXPECT_GT(r.report.vertices, 4);
+  EXPECT_EQ(r.report.vertices, static_cast<int>(r.cage.vertices.size()));
+  EXPECT_NO_THROW(mesh::validateClosedSurface(r.cage, "cage"));
+  EXPECT_EQ(countIntersections(r.cage), 0);
+  for (const Vec3& p : probePoints(torus)) EXPECT_NEAR(windingNumber(r.cage, p), 1.0, 1e-6);
 }
 
 // The message names the field and the reason.
@@ -257,7 +341,7 @@ TEST(AutoCage, Deterministic) {
   const TriangleMesh m = mesh::testing::makeTorus(24, 12);
   CageOptions o;
   o.vertexBudget = 80;
-  o.tightness = 0.2;
+  o.tightness = 0.0;
   o.threads = 1;
   const CageResult a = makeCage(m, o);
   o.threads = 2;
