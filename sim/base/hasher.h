@@ -2,9 +2,12 @@
 // checksums: 8 bytes at a time, not cryptographic.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
+#include <string>
 
 namespace sb {
 
@@ -45,5 +48,17 @@ class Hasher {
   }
   std::uint64_t h_;
 };
+
+// DIR/PREFIX<key as 32 hex digits>EXTENSION: the file a cache keeps under a 128-bit key.
+inline std::string keyedCachePath(const std::string& dir, const std::string& prefix,
+                                  const std::array<std::uint64_t, 2>& key,
+                                  const std::string& extension) {
+  char hex[40];
+  std::snprintf(hex, sizeof(hex), "%016llx%016llx", static_cast<unsigned long long>(key[0]),
+                static_cast<unsigned long long>(key[1]));
+  std::string path = dir;
+  if (!path.empty() && path.back() != '/') path += '/';
+  return path + prefix + hex + extension;
+}
 
 }  // namespace sb

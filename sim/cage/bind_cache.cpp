@@ -1,7 +1,6 @@
 // The bind cache: the weight file format (Embedding::save / load / fromBytes), its checksum and
 // the checks on what passes it, and the cache key and file name of a bind.
 #include <cmath>
-#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <limits>
@@ -306,12 +305,7 @@ std::array<std::uint64_t, 2> bindCacheKey(const std::vector<Vec3>& points, const
 }
 
 std::string bindCachePath(const std::string& cacheDir, const std::array<std::uint64_t, 2>& key) {
-  char name[64];
-  std::snprintf(name, sizeof(name), "mvc-%016llx%016llx.sbw",
-                static_cast<unsigned long long>(key[0]), static_cast<unsigned long long>(key[1]));
-  std::string dir = cacheDir;
-  if (!dir.empty() && dir.back() != '/') dir += '/';
-  return dir + name;
+  return keyedCachePath(cacheDir, "mvc-", key, ".sbw");
 }
 
 }  // namespace sb::cage

@@ -1,6 +1,5 @@
 #include "sim/cage/cage_cache.h"
 
-#include <cstdio>
 #include <filesystem>
 #include <system_error>
 
@@ -35,12 +34,7 @@ std::array<std::uint64_t, 2> cageCacheKey(const mesh::TriangleMesh& mesh,
 }
 
 std::string cageCachePath(const std::string& cacheDir, const std::array<std::uint64_t, 2>& key) {
-  char name[64];
-  std::snprintf(name, sizeof(name), "cage-%016llx%016llx.obj",
-                static_cast<unsigned long long>(key[0]), static_cast<unsigned long long>(key[1]));
-  std::string dir = cacheDir;
-  if (!dir.empty() && dir.back() != '/') dir += '/';
-  return dir + name;
+  return keyedCachePath(cacheDir, "cage-", key, ".obj");
 }
 
 CachedCage cachedCage(const mesh::TriangleMesh& mesh, const CageOptions& options,
