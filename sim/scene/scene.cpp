@@ -257,6 +257,7 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMe
   }
   // With an automatic cage the detailed mesh is named once, as renderMesh or as mesh.
   std::string renderPath = f.text("renderMesh", &none);
+  std::string renderField = "renderMesh";  // the field that named the detailed mesh
   if (!sb.autoCage) {
     sb.meshPath = f.text("mesh", nullptr);
   } else if (f.has("mesh")) {
@@ -264,6 +265,7 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMe
       f.fail("cage",
              "an automatic cage replaces 'mesh'; name the detailed mesh once, as renderMesh");
     renderPath = f.text("mesh", nullptr);
+    renderField = "mesh";
   } else if (renderPath.empty()) {
     f.fail("renderMesh", "is required with an automatic cage (the mesh the cage is made of)");
   }
@@ -320,7 +322,7 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMe
   std::array<std::string, 3> renderKey{resolve(baseDir, sb.meshPath), resolve(baseDir, renderPath),
                                        renderPath};
   if (sb.autoCage) {
-    detail = readMeshField(f, "renderMesh", renderPath, baseDir);
+    detail = readMeshField(f, renderField, renderPath, baseDir);
     cage::CageOptions options;
     options.vertexBudget = sb.autoCage->vertices;
     options.tightness = sb.autoCage->tightness;

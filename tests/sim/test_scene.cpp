@@ -250,6 +250,7 @@ TEST(Scene, AutomaticCageErrorsNameTheField) {
                    "bodies[0].cage: an automatic cage replaces 'mesh'");
   expectSceneError(withCage(R"("renderMesh": "no_such.obj", "cage": {"auto": true})"),
                    "bodies[0].renderMesh");
+  expectSceneError(withCage(R"("mesh": "no_such.obj", "cage": {"auto": true})"), "bodies[0].mesh");
   const std::string cage = R"("mesh": ")" + detail + R"(", )";
   expectSceneError(withCage(cage + R"("interior": {"spacing": 0})"),
                    "bodies[0].interior.spacing: is required and must be positive");
