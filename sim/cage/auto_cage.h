@@ -58,7 +58,8 @@ struct CageResult {
 // Builds the cage of `mesh` (vertices in any unit; triangles may be empty: then the vertices are
 // enclosed). Throws std::invalid_argument naming the field and the reason for: no vertices,
 // non-finite coordinates, a triangle index out of range, vertexBudget < 4, tightness outside
-// [0, 1] or not finite, threads < 0. Throws std::runtime_error if a final check fails (a bug,
+// [0, 1] or not finite, threads < 0, a mesh whose guard samples would exceed 5·10⁷ points (many
+// triangles much larger than the voxels). Throws std::runtime_error if a final check fails (a bug,
 // never expected).
 CageResult makeCage(const mesh::TriangleMesh& mesh, const CageOptions& options = {});
 

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+#include <string>
 
 #include "sim/mesh/closest_point.h"
 
@@ -150,13 +152,31 @@ void GuardSet::bucketsIn(const Vec& lo, const Vec& hi, std::vector<int>& out) co
 
 GuardSet makeGuards(const std::vector<Vec>& vertices, const std::vector<Tri>& triangles,
                     double spacing, const std::array<int, 3>& cells) {
+  auto samplesPerSide = [&](const Tri& t) {
+    const Vec &a = vertices[static_cast<std::size_t>(t[0])],
+              &b = vertices[static_cast<std::size_t>(t[1])],
+              &c = vertices[static_cast<std::size_t>(t[2])];
+    const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+    return std::max(1, static_cast<int>(std::ceil(longest / spacing)));
+  };
+  // Counted before anything is allocated: a triangle with k samples per side adds about k²/2.
+  double total = double(vertices.size());
+  for (const Tri& t : triangles) {
+    const double k = samplesPerSide(t);
+    total += k == 1 ? 1.0 : 0.5 * (k + 1) * (k + 2);
+  }
+  if (total > double(kMaxGuardPoints))
+    throw std::invalid_argument(
+        "mesh: its triangles would need " + std::to_string(static_cast<long long>(total)) +
+        " sample points (at most " + std::to_string(kMaxGuardPoints) +
+        "): too many triangles much longer than a voxel (a lower tightness makes the voxels "
+        "larger)");
   std::vector<Vec> raw(vertices);
   for (const Tri& t : triangles) {
     const Vec &a = vertices[static_cast<std::size_t>(t[0])],
               &b = vertices[static_cast<std::size_t>(t[1])],
               &c = vertices[static_cast<std::size_t>(t[2])];
-    const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
-    const int k = std::max(1, static_cast<int>(std::ceil(longest / spacing)));
+    const int k = samplesPerSide(t);
     if (k == 1) {
       raw.push_back((a + b + c) / 3.0);
       continue;

@@ -51,8 +51,13 @@ struct GuardSet {
   void bucketsIn(const Vec& lo, const Vec& hi, std::vector<int>& out) const;
 };
 
+// Most guard points makeGuards builds (~2.6 GB while they are sorted): many triangles much longer
+// than a voxel need k²/2 samples each, so a soup of large triangles would otherwise exhaust memory.
+inline constexpr long long kMaxGuardPoints = 50000000;
+
 // Input vertices plus samples on every triangle at most `spacing` apart (the centroid for a small
-// triangle), in the voxel frame; `cells` bounds the grid (points must lie in [0, cells)).
+// triangle), in the voxel frame; `cells` bounds the grid (points must lie in [0, cells)). Throws
+// std::invalid_argument ("mesh: ...") when that would be more than kMaxGuardPoints points.
 GuardSet makeGuards(const std::vector<Vec>& vertices, const std::vector<Tri>& triangles,
                     double spacing, const std::array<int, 3>& cells);
 

@@ -361,6 +361,13 @@ TEST(AutoCage, BadInputIsRefusedByName) {
   o = {};
   o.threads = -1;
   expectInvalid(box, o, "threads: -1 is negative");
+  // 20,000 triangles across the whole box: ~3,100 samples each at 45 voxels, 6·10⁷ in all, over
+  // the 5·10⁷ bound; refused before anything is allocated (it would take ~3 GB).
+  TriangleMesh soup = box;  // the unit box, so the added corners keep its bounding box
+  const int base = static_cast<int>(soup.vertices.size());
+  soup.vertices.insert(soup.vertices.end(), {Vec3(0, 0, 0), Vec3(1, 1, 1), Vec3(1, 0, 1)});
+  for (int i = 0; i < 20000; ++i) soup.triangles.push_back({base, base + 1, base + 2});
+  expectInvalid(soup, {}, "mesh: its triangles would need");
 }
 
 TEST(AutoCage, Deterministic) {
