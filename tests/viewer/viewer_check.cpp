@@ -5,8 +5,8 @@
 //   viewer_check click-point STATS WIDGET        a pixel inside a recorded panel control: "x y"
 //   viewer_check visible SHOT.png EMPTY.png STATS
 //       every body's projected screen bounds differ from the same frame drawn without bodies
-//   viewer_check moved REF.json DRAG.json BODY MIN_METRES
-//       BODY's centre in DRAG minus REF, along the camera's right axis, is at least MIN_METRES
+//   viewer_check moved BEFORE.json AFTER.json BODY MIN_METRES
+//       BODY's centre in AFTER minus BEFORE, along the camera's right axis, is at least MIN_METRES
 //   viewer_check still A.json B.json
 //       paused in both, B is a later frame, simulated time and every centre unchanged
 // Exit code 0 = the check holds, 1 = it does not, 2 = bad input.
@@ -107,19 +107,19 @@ double centreComponent(const json& stats, int body, int axis) {
   return stats.at("bodies").at(body).at("centre").at(axis).get<double>();
 }
 
-int moved(const std::string& refPath, const std::string& dragPath, int body, double minMetres) {
-  const json ref = readJson(refPath), drag = readJson(dragPath);
-  const json& right = drag.at("camera").at("right");
+int moved(const std::string& beforePath, const std::string& afterPath, int body, double minMetres) {
+  const json before = readJson(beforePath), after = readJson(afterPath);
+  const json& right = after.at("camera").at("right");
   double along = 0.0, distance2 = 0.0;
   for (int a = 0; a < 3; ++a) {
-    const double d = centreComponent(drag, body, a) - centreComponent(ref, body, a);
+    const double d = centreComponent(after, body, a) - centreComponent(before, body, a);
     along += d * right.at(a).get<double>();
     distance2 += d * d;
   }
   std::printf(
       "body %d: centre moved %.4f m along the camera's right axis (%.4f m in total) "
-      "compared with the run without dragging; need >= %.4f\n",
-      body, along, std::sqrt(distance2), minMetres);
+      "from %s to %s; need >= %.4f\n",
+      body, along, std::sqrt(distance2), beforePath.c_str(), afterPath.c_str(), minMetres);
   return along >= minMetres ? 0 : 1;
 }
 
