@@ -21,6 +21,7 @@
 #include "sim/mesh/closest_point.h"
 #include "sim/mesh/mesh_io.h"
 #include "tests/mesh/mesh_fixtures.h"
+#include "tests/support/sanitizers.h"
 
 namespace sb::cage {
 namespace {
@@ -188,17 +189,7 @@ TriangleMesh merged(const TriangleMesh& a, const TriangleMesh& b) {
 // the slowest inputs are left out: the cages are the same code on the same input, and the
 // normal build checks their geometry; the sanitizer builds are there for memory errors and
 // races, which the remaining inputs exercise (every phase, the thread pool of the final checks).
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-constexpr bool kSanitized = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
-constexpr bool kSanitized = true;
-#else
-constexpr bool kSanitized = false;
-#endif
-#else
-constexpr bool kSanitized = false;
-#endif
+using test_support::kSanitized;
 
 #define SKIP_WHEN_SANITIZED() \
   if (kSanitized) GTEST_SKIP() << "slow under the sanitizers; checked in the normal build"

@@ -19,6 +19,7 @@
 #include "sim/world/contact/surface_grid.h"
 #include "sim/world/mass_properties.h"
 #include "test_util.h"
+#include "tests/support/sanitizers.h"
 
 namespace sb {
 namespace {
@@ -613,7 +614,11 @@ TEST(Contact, VerySoftBodyUnderStifferOnesStaysBounded) {
 // surface multiplied and the soak ended in NaN). Not asserted, because not yet true: the goo's
 // particles still jitter (single particles up to 11 m/s, snapped back within reach), and its
 // surface ends up inside out (docs/design.md §5.3).
+// Skipped under AddressSanitizer: the jittering goo makes every contact look-up search far (its
+// particles' speed widens the reach), 22 s in the optimised build and 433 s under ASan, the
+// longest test of CI by three times; the GCC and TSan builds still run it.
 TEST(Contact, BodyWithoutStiffnessUnderAPileStaysWithinItsReach) {
+  if (test_support::kAddressSanitizer) GTEST_SKIP() << "433 s under ASan; run by the other builds";
   World w = floorWorld();
   WorldSettings awake = w.settings();
   awake.sleep = false;

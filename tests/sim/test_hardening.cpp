@@ -18,6 +18,7 @@
 #include "sim/scene/scene.h"
 #include "sim/world/contact/surface_grid.h"
 #include "tests/sim/test_util.h"
+#include "tests/support/sanitizers.h"
 #include "tests/support/temp_dir_test.h"
 
 namespace sb {
@@ -58,17 +59,7 @@ double seconds(std::chrono::steady_clock::time_point t0) {
 }
 
 // Time limits are for optimised builds; sanitizers slow everything down about this much.
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-constexpr double kSanitizerSlowdown = 10;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
-constexpr double kSanitizerSlowdown = 10;
-#else
-constexpr double kSanitizerSlowdown = 1;
-#endif
-#else
-constexpr double kSanitizerSlowdown = 1;
-#endif
+constexpr double kSanitizerSlowdown = test_support::kSanitized ? 10 : 1;
 
 // Restores the default thread count when a test ends.
 struct ThreadsGuard {

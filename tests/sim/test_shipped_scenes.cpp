@@ -17,19 +17,7 @@
 #include "sim/cage/embedding.h"
 #include "sim/scene/scene.h"
 #include "sim/world/matching/plasticity.h"
-
-// CI also runs the suite under AddressSanitizer (SOFTBODY_SANITIZE adds -fsanitize=address, which
-// GCC announces with __SANITIZE_ADDRESS__ and Clang through __has_feature).
-#if defined(__SANITIZE_ADDRESS__)
-#define SB_TEST_SANITIZED 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define SB_TEST_SANITIZED 1
-#endif
-#endif
-#ifndef SB_TEST_SANITIZED
-#define SB_TEST_SANITIZED 0
-#endif
+#include "tests/support/sanitizers.h"
 
 namespace sb {
 namespace {
@@ -73,11 +61,13 @@ RunLength runLengthOf(const std::string& name) {
       // Under AddressSanitizer (about 15× slower here) the 12-body pile runs 3 s without the
       // rest check: the results are bit-identical to the normal build, which checks the physics;
       // the sanitizer build is there for memory and undefined-behaviour errors.
-      {"pile", {SB_TEST_SANITIZED ? 3.0 : 13.0, !SB_TEST_SANITIZED}},  // (10.1 s)
+      {"pile",
+       {test_support::kAddressSanitizer ? 3.0 : 13.0,
+        !test_support::kAddressSanitizer}},  // (10.1 s)
       // 54 bodies still move by more than 1e-3 of a diagonal per step after 14 s (13 s of CPU),
       // so the performance scene is checked while it moves: 3 s covers the fall and the first
       // contacts of all three layers. Under AddressSanitizer 1 s (the first layer lands; 15 s).
-      {"large", {SB_TEST_SANITIZED ? 1.0 : 3.0, false}},
+      {"large", {test_support::kAddressSanitizer ? 1.0 : 3.0, false}},
   };
   const auto it = special.find(name);
   return it == special.end() ? RunLength{} : it->second;
@@ -203,7 +193,7 @@ TEST(ShippedScenes, PileAtOneSecondStepsRestsAsAtShortSteps) {
   settings.timeStep = 1.0;
   scene.world.setSettings(settings);
   ASSERT_EQ(scene.world.substepsFor(1.0), 120);
-  const int steps = SB_TEST_SANITIZED ? 2 : 8;
+  const int steps = test_support::kAddressSanitizer ? 2 : 8;
   for (int s = 0; s < steps; ++s) {
     stepAndCheckFinite(scene, s);
     if (HasFatalFailure()) return;
@@ -214,7 +204,7 @@ TEST(ShippedScenes, PileAtOneSecondStepsRestsAsAtShortSteps) {
     // The pile's bodies are 0.5–0.8 m; soft ones squash under the others by centimetres.
     EXPECT_LT(test::maxDeviationFromRigidFit(scene, i), 0.15 * test::boundingBoxDiagonal(scene, i))
         << "body " << i;
-    if (!SB_TEST_SANITIZED) {
+    if (!test_support::kAddressSanitizer) {
       EXPECT_TRUE(scene.world.isSleeping(scene.bodies[size_t(i)].handle)) << "body " << i;
     }
   }
@@ -334,7 +324,8 @@ TEST(ShippedScenes, ClusterCountDoesNotChangeTheStiffness) {
 // A pile: at least ten bodies dropped onto each other; once settled, some rest on others rather
 // than on the floor (their lowest particle is well above every plane collider).
 TEST(ShippedScenes, PileRestsBodiesOnEachOther) {
-  if (SB_TEST_SANITIZED) GTEST_SKIP() << "a minute under the sanitizer; see runLengthOf";
+  if (test_support::kAddressSanitizer)
+    GTEST_SKIP() << "a minute under the sanitizer; see runLengthOf";
   Scene scene = loadScene(scenePath("pile"));
   ASSERT_GE(scene.bodies.size(), 10u);
   for (int s = 0; s < stepsFor(scene, runLengthOf("pile").seconds); ++s) {
