@@ -536,8 +536,9 @@ int ViewerApp::run() {
     if (framebufferWidth_ > 0 && framebufferHeight_ > 0) {
       renderFrame();
       if (!options_.hideUi) ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
-      if (!options_.screenshot.empty() && frame_ == screenshotFrame)
-        takeScreenshot(options_.screenshot);
+      if (!options_.screenshot.empty() && frame_ == screenshotFrame &&
+          !takeScreenshot(options_.screenshot))
+        outputFailed_ = true;
       if (!screenshotRequest_.empty()) {
         takeScreenshot(screenshotRequest_);
         screenshotRequest_.clear();
@@ -559,8 +560,9 @@ int ViewerApp::run() {
     ++timings_.frames;
     ++frame_;
 
-    if (!options_.statsPath.empty() && options_.statsEvery > 0 && frame_ % options_.statsEvery == 0)
-      writeStats(options_.statsPath);
+    if (!options_.statsPath.empty() && options_.statsEvery > 0 &&
+        frame_ % options_.statsEvery == 0 && !writeStats(options_.statsPath))
+      outputFailed_ = true;
     if (options_.frames > 0 && frame_ >= options_.frames)
       glfwSetWindowShouldClose(window_, GLFW_TRUE);
 
@@ -575,7 +577,7 @@ int ViewerApp::run() {
     }
   }
   endDrag();
-  if (!options_.statsPath.empty()) writeStats(options_.statsPath);
+  if (!options_.statsPath.empty() && !writeStats(options_.statsPath)) outputFailed_ = true;
   const double seconds = std::chrono::duration<double>(Clock::now() - start_).count();
   const double frames = static_cast<double>(std::max<long>(timings_.frames, 1));
   std::printf(
@@ -583,6 +585,12 @@ int ViewerApp::run() {
       "render %.3f ms\n",
       timings_.frames, seconds, static_cast<double>(timings_.frames) / std::max(seconds, 1e-9),
       timings_.simSum / frames, timings_.deformSum / frames, timings_.renderSum / frames);
+  if (outputFailed_) {
+    std::fprintf(stderr,
+                 "softbody: an output asked for on the command line could not be written "
+                 "(see above)\n");
+    return 1;
+  }
   return 0;
 }
 

@@ -121,7 +121,8 @@ class ViewerApp {
   void drawScenePanel();
 
   // ---- viewer_stats.cpp ----
-  void writeStats(const std::string& path) const;
+  // Writes the stats file (atomically); false, with the reason on stderr, when it cannot.
+  bool writeStats(const std::string& path) const;
 
   ViewerOptions options_;
   Scene scene_;
@@ -176,6 +177,8 @@ class ViewerApp {
   std::string errorMessage_, statusMessage_;
   std::string scenePathInput_, savePathInput_, screenshotPathInput_;
   std::string screenshotRequest_;  // path of a screenshot to take after this frame is drawn
+  // A --screenshot or --stats file could not be written: the program exits with code 1.
+  bool outputFailed_ = false;
 
   FrameTimings timings_;
   // Window-pixel rectangles (x0, y0, x1, y1) of named panel controls in the last frame, written

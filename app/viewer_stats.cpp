@@ -22,7 +22,7 @@ nlohmann::json vec(const glm::vec3& v) {
 
 }  // namespace
 
-void ViewerApp::writeStats(const std::string& path) const {
+bool ViewerApp::writeStats(const std::string& path) const {
   using nlohmann::json;
   const double frames = static_cast<double>(std::max<long>(timings_.frames, 1));
   const double steps = static_cast<double>(std::max<long>(timings_.steps, 1));
@@ -117,8 +117,10 @@ void ViewerApp::writeStats(const std::string& path) const {
 
   try {
     writeFileAtomic(path, [&](std::ostream& out) { out << j.dump(2) << "\n"; });
+    return true;
   } catch (const FileError& e) {
     std::fprintf(stderr, "softbody: cannot write the stats file: %s\n", e.what());
+    return false;
   }
 }
 
