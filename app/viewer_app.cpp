@@ -399,7 +399,7 @@ void ViewerApp::renderFrame() {
   const ViewRect rect = viewRect();
   const float toFramebuffer =
       static_cast<float>(framebufferWidth_) / static_cast<float>(std::max(windowWidth_, 1));
-  if (!options_.hideUi) {
+  if (rect.x > 0.0f) {  // the panel's background
     glEnable(GL_SCISSOR_TEST);
     glScissor(0, 0, static_cast<GLsizei>(rect.x * toFramebuffer), framebufferHeight_);
     glClearColor(panelColour_.r, panelColour_.g, panelColour_.b, 1.0f);

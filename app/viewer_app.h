@@ -115,6 +115,8 @@ class ViewerApp {
 
   // ---- viewer_ui.cpp ----
   void drawUi();
+  void drawPanel();
+  void drawStatusBar();
   void drawBodyPanel(int body);
   void drawWorldPanel();
   void drawTimingPanel();
@@ -144,6 +146,7 @@ class ViewerApp {
   bool stepOnce_ = false;
   bool resetRequested_ = false;
   int stepsPerFrame_ = 1;
+  bool panelHidden_ = false;  // key H: the 3D view takes the whole window
 
   // Overlays.
   bool showParticles_ = false;

@@ -53,7 +53,7 @@ void ViewerApp::installCallbacks() {
 
 ViewerApp::ViewRect ViewerApp::viewRect() const {
   ViewRect r;
-  const float panel = options_.hideUi ? 0.0f : kPanelWidth;
+  const float panel = options_.hideUi || panelHidden_ ? 0.0f : kPanelWidth;
   const int width = windowWidth_ > 0 ? windowWidth_ : options_.width;
   const int height = windowHeight_ > 0 ? windowHeight_ : options_.height;
   r.x = std::min(panel, static_cast<float>(width) - 1.0f);
@@ -147,6 +147,9 @@ void ViewerApp::onKey(int key, int action, int mods) {
       break;
     case GLFW_KEY_G:
       if (press) showGoals_ = !showGoals_;
+      break;
+    case GLFW_KEY_H:
+      if (press) panelHidden_ = !panelHidden_;
       break;
     case GLFW_KEY_LEFT:
       camera_.orbit(-15.0f, 0.0f);

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <limits>
 
+#include <imgui.h>
 #include <nlohmann/json.hpp>
 
 #include "app/viewer_app.h"
@@ -32,6 +33,8 @@ bool ViewerApp::writeStats(const std::string& path) const {
   j["frame"] = frame_;
   j["simTime"] = scene_.world.time();
   j["paused"] = paused_;
+  j["panelVisible"] = !options_.hideUi && !panelHidden_;
+  j["keyboardToPanel"] = ImGui::GetCurrentContext() && ImGui::GetIO().WantCaptureKeyboard;
   j["window"] = {windowWidth_, windowHeight_};
   j["fps"] = static_cast<double>(timings_.frames) / std::max(seconds, 1e-9);
   j["msPerFrame"] = {{"simulation", timings_.simSum / frames},
@@ -69,6 +72,8 @@ bool ViewerApp::writeStats(const std::string& path) const {
     const Vec3 c = scene_.world.centreOfMass(handle);
     json b;
     b["name"] = scene_.world.name(handle);
+    const BodyParams& params = scene_.world.params(handle);
+    b["params"] = {{"alpha", params.alpha}, {"beta", params.beta}};
     b["centre"] = {c.x(), c.y(), c.z()};
     // Screen bounds of the projected render vertices (window pixels, origin top left).
     glm::vec2 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());

@@ -1,6 +1,8 @@
 // The ImGui control panel: a fixed panel on the left of the window (fixed, so tests can click
-// its controls at known pixels). Every control has a tooltip. Changes apply immediately to the
-// running World.
+// its controls at known pixels), and a status bar along the bottom of the 3D view for messages
+// (errors, status, simulation events): messages never push the panel's controls down, so a
+// control stays where the hand expects it. Every control has a tooltip. Changes apply
+// immediately to the running World.
 #include <algorithm>
 #include <cstdio>
 #include <string>
@@ -36,6 +38,12 @@ void ViewerApp::recordWidget(const char* name) {
 }
 
 void ViewerApp::drawUi() {
+  widgetRects_.clear();
+  if (!panelHidden_) drawPanel();
+  drawStatusBar();
+}
+
+void ViewerApp::drawPanel() {
   ImGui::SetNextWindowPos(ImVec2(0.0f, 0.0f), ImGuiCond_Always);
   ImGui::SetNextWindowSize(ImVec2(kPanelWidth, static_cast<float>(std::max(windowHeight_, 100))),
                            ImGuiCond_Always);
@@ -44,7 +52,6 @@ void ViewerApp::drawUi() {
   ImGui::PushItemWidth(-140.0f);
 
   // ---- run control (first row: its position is fixed for the tests) ----
-  widgetRects_.clear();
   ImGui::Checkbox("Pause", &paused_);
   recordWidget("pause");
   tooltip("Stop or resume the simulation (key: space). Dragging and the camera keep working.");
@@ -64,29 +71,6 @@ void ViewerApp::drawUi() {
 
   ImGui::Text("t = %.2f s   frame %ld   %.0f fps", scene_.world.time(), frame_,
               ImGui::GetIO().Framerate);
-
-  if (!errorMessage_.empty()) {
-    ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1.0f, 0.4f, 0.35f, 1.0f));
-    ImGui::TextWrapped("%s", errorMessage_.c_str());
-    ImGui::PopStyleColor();
-    if (ImGui::SmallButton("dismiss")) errorMessage_.clear();
-    tooltip("Hide this message.");
-  }
-  if (!statusMessage_.empty()) ImGui::TextDisabled("%s", statusMessage_.c_str());
-
-  if (!eventLog_.empty()) {
-    ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1.0f, 0.85f, 0.3f, 1.0f));
-    ImGui::TextWrapped("%ld simulation event(s); latest: %s", eventCount_,
-                       eventLog_.front().c_str());
-    ImGui::PopStyleColor();
-    tooltip("Bodies whose state became NaN/Inf are reset to their start by the simulation.");
-    if (ImGui::TreeNode("All events")) {
-      for (const std::string& e : eventLog_) ImGui::BulletText("%s", e.c_str());
-      if (ImGui::SmallButton("clear")) eventLog_.clear();
-      tooltip("Forget the listed events.");
-      ImGui::TreePop();
-    }
-  }
 
   const bool sceneOpen = ImGui::CollapsingHeader("Scene file");
   recordWidget("sceneHeader");
@@ -123,10 +107,59 @@ void ViewerApp::drawUi() {
         "Left drag: pull the surface point under the cursor.\n"
         "Ctrl + left drag: pull the nearest particle.\n"
         "Right drag: orbit. Shift + right drag or middle drag: pan. Wheel: zoom.\n"
-        "Space: pause. S/N: step. R: reset. F: frame the scene.\n"
+        "Space: pause. S/N: step. R: reset. F: frame the scene. H: hide/show this panel.\n"
         "P/C/K/G: particles, cage, clusters, goals. Arrows: orbit. +/-: zoom. Esc/Q: quit.");
   }
   ImGui::PopItemWidth();
+  ImGui::End();
+}
+
+void ViewerApp::drawStatusBar() {
+  const ViewRect view = viewRect();
+  // Across the bottom of the 3D view, as tall as its lines (at most half the view), in front of
+  // the scene; it takes no focus, so the keys keep working.
+  ImGui::SetNextWindowPos(ImVec2(view.x, view.y + view.height), ImGuiCond_Always,
+                          ImVec2(0.0f, 1.0f));
+  ImGui::SetNextWindowSizeConstraints(ImVec2(view.width, 0.0f),
+                                      ImVec2(view.width, 0.5f * view.height));
+  ImGui::SetNextWindowBgAlpha(0.8f);
+  ImGui::Begin("##status", nullptr,
+               ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_AlwaysAutoResize |
+                   ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoSavedSettings |
+                   ImGuiWindowFlags_NoFocusOnAppearing | ImGuiWindowFlags_NoNav);
+  if (!errorMessage_.empty()) {
+    ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1.0f, 0.4f, 0.35f, 1.0f));
+    ImGui::TextWrapped("%s", errorMessage_.c_str());
+    ImGui::PopStyleColor();
+    if (ImGui::SmallButton("dismiss")) errorMessage_.clear();
+    tooltip("Hide this message.");
+  }
+  if (!eventLog_.empty()) {
+    ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1.0f, 0.85f, 0.3f, 1.0f));
+    ImGui::TextWrapped("%ld simulation event(s); latest: %s", eventCount_,
+                       eventLog_.front().c_str());
+    ImGui::PopStyleColor();
+    tooltip("Bodies whose state became NaN/Inf are reset to their start by the simulation.");
+    if (ImGui::SmallButton("all events")) ImGui::OpenPopup("events");
+    ImGui::SameLine();
+    if (ImGui::SmallButton("clear")) eventLog_.clear();
+    tooltip("Forget the listed events.");
+    if (ImGui::BeginPopup("events")) {
+      for (const std::string& e : eventLog_) ImGui::BulletText("%s", e.c_str());
+      ImGui::EndPopup();
+    }
+  }
+  if (!statusMessage_.empty()) {
+    ImGui::PushStyleColor(ImGuiCol_Text, ImGui::GetStyleColorVec4(ImGuiCol_TextDisabled));
+    ImGui::TextWrapped("%s", statusMessage_.c_str());
+    ImGui::PopStyleColor();
+  } else if (errorMessage_.empty() && eventLog_.empty()) {
+    ImGui::PushStyleColor(ImGuiCol_Text, ImGui::GetStyleColorVec4(ImGuiCol_TextDisabled));
+    ImGui::TextWrapped(
+        "Left drag: pull a body (Ctrl: one particle). Right drag: orbit. Wheel: zoom. "
+        "H: hide the panel. All keys: Help, last in the panel.");
+    ImGui::PopStyleColor();
+  }
   ImGui::End();
 }
 
@@ -232,14 +265,20 @@ void ViewerApp::drawBodyPanel(int body) {
     tooltip(
         "Shape matching goal: rigid keeps the rest shape; linear allows shear and stretch; "
         "quadratic also bending and twisting.");
+    // The first body's sliders are recorded for the tests (they click and compare positions).
+    auto record = [&](const char* name) {
+      if (body == 0) recordWidget(name);
+    };
     changed |=
         sliderDouble("alpha", &p.alpha, 0.0f, 1.0f, "%.3f",
                      "Stiffness, [0, 1]: share of the way to the goal per sub-step (1 = onto the\n"
                      "goal: rigid in rigid mode). The same at any number of clusters.");
+    record("alpha");
     changed |= sliderDouble(
         "beta", &p.beta, 0.0f, 1.0f, "%.3f",
         "Blend of the goal between rotation only (0) and the linear/quadratic fit (1),\n"
         "applied as 0.9 x beta so every shape keeps a restoring force.");
+    record("beta");
     changed |=
         sliderDouble("damping", &p.damping, 0.0f, 1.0f, "%.3f",
                      "Damping per sub-step of the velocity relative to the body's rigid motion\n"
@@ -251,9 +290,11 @@ void ViewerApp::drawBodyPanel(int body) {
                             "(their impact is one event of the two bodies as a whole).");
     changed |= sliderDouble("c_yield", &p.plasticity.yield, 0.0f, 1.0f, "%.3f",
                             "Plastic yield: stretch ||S - I|| above which the rest shape creeps.");
+    record("c_yield");
     changed |= sliderDouble("c_creep", &p.plasticity.creep, 0.0f, 20.0f, "%.2f",
                             "Plastic creep rate in 1/s (0 = no plasticity): a sub-step absorbs\n"
                             "1 - exp(-h creep) of the stretch beyond the yield.");
+    record("c_creep");
     changed |= sliderDouble("c_max", &p.plasticity.max, 0.0f, 2.0f, "%.3f",
                             "Upper bound of the permanent deformation ||Sp - I||, [0, 2].");
     if (changed) {

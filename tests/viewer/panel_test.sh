@@ -1,0 +1,94 @@
+#!/usr/bin/env bash
+# The panel stays put (xdotool, inside Xvfb): the sliders alpha, beta, c_yield and c_creep of the
+# first body are at the same pixels before and after a reset (R) and after an error message
+# (messages go to the status bar along the bottom of the 3D view); Ctrl+click on alpha after the
+# reset edits alpha; typing into a text field fires no shortcut; H hides the panel.
+# usage: panel_test.sh SOFTBODY CHECK WORKDIR
+SOFTBODY=$1 CHECK=$2 WORK=$3
+source "$(dirname "$0")/common.sh"
+enter_xvfb "$@"
+
+printf '{ "bodies": [ { "name": "b", "mesh": "x.obj", "alpha": 3 } ] }\n' >"$WORK/bad_scene.json"
+live=$WORK/live.json
+"$SOFTBODY" ${SCENE_ARGS[@]+"${SCENE_ARGS[@]}"} --frames 100000 --stats "$live" --stats-every 3 \
+  >"$WORK/viewer.log" 2>&1 &
+VIEWER_PID=$!
+trap '[ -n "${VIEWER_PID:-}" ] && kill "$VIEWER_PID" 2>/dev/null || true' EXIT
+wait_for_frame "$live" 10
+
+# positions STATS: the four sliders' rectangles, one line.
+positions() {
+  local name
+  for name in alpha beta c_yield c_creep; do
+    printf '%s=%s ' "$name" "$("$CHECK" get "$1" "/widgets/$name")"
+  done
+}
+# in_view: moves the mouse over the 3D view (keys typed there go to the viewer).
+in_view() {
+  xdotool mousemove 900 200
+  sleep 0.15
+}
+
+click_widget "$live" sceneHeader  # opened by hand first: the layout compared is this one
+next_frames "$live" 5
+before=$(positions "$live")
+echo "before:      $before"
+
+in_view
+xdotool key r
+next_frames "$live" 5
+[ "$("$CHECK" get "$live" /status)" = reset ] || fail "R did not reset (status: $("$CHECK" get "$live" /status))"
+after_reset=$(positions "$live")
+echo "after R:     $after_reset"
+[ "$after_reset" = "$before" ] || fail "the sliders moved after R"
+
+click_widget "$live" scenePath
+replace_text "$WORK/bad_scene.json"
+click_widget "$live" open
+next_frames "$live" 5
+[ -n "$("$CHECK" get "$live" /error)" ] || fail "no error shown for the bad scene"
+after_error=$(positions "$live")
+echo "after error: $after_error"
+[ "$after_error" = "$before" ] || fail "the sliders moved when the error was shown"
+
+# Typing in a text field fires no shortcut: s (step, pauses), p, r (reset) typed into the path.
+t0=$("$CHECK" get "$live" /simTime)
+click_widget "$live" scenePath
+xdotool type --delay 30 "spr"
+sleep 0.2
+next_frames "$live" 10
+[ "$("$CHECK" get "$live" /paused)" = false ] || fail "typing s into a text field paused"
+t1=$("$CHECK" get "$live" /simTime)
+awk -v a="$t0" -v b="$t1" 'BEGIN { exit !(b > a) }' || fail "typing r into a text field reset ($t0 -> $t1 s)"
+
+# Ctrl+click on alpha turns the slider into a text field: type a value.
+read -r x y < <("$CHECK" click-point "$live" alpha)
+xdotool mousemove "$x" "$y"
+sleep 0.15
+xdotool keydown ctrl
+sleep 0.1
+xdotool click 1
+sleep 0.15
+xdotool keyup ctrl
+sleep 0.1
+replace_text "0.25"
+xdotool keydown Return  # held for a moment: ImGui 1.86 polls key state once per frame
+sleep 0.15
+xdotool keyup Return
+next_frames "$live" 5
+alpha=$("$CHECK" get "$live" /bodies/0/params/alpha)
+echo "alpha after Ctrl+click and typing 0.25: $alpha"
+awk -v a="$alpha" 'BEGIN { exit !(a > 0.2499 && a < 0.2501) }' || fail "Ctrl+click on alpha did not edit alpha"
+
+# H hides the panel and shows it again.
+in_view
+next_frames "$live" 3
+[ "$("$CHECK" get "$live" /keyboardToPanel)" = false ] || fail "the panel still takes the keyboard"
+xdotool key h
+next_frames "$live" 5
+[ "$("$CHECK" get "$live" /panelVisible)" = false ] || fail "H did not hide the panel"
+xdotool key h
+next_frames "$live" 5
+[ "$("$CHECK" get "$live" /panelVisible)" = true ] || fail "H did not show the panel again"
+[ "$(positions "$live")" = "$before" ] || fail "the sliders moved after hiding and showing the panel"
+echo "PASS: the panel's sliders stay put through R and an error; Ctrl+click edits alpha; typing in a field fires no shortcut; H hides the panel"
