@@ -1,6 +1,7 @@
 #include "sim/scene/scene.h"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -274,7 +275,8 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMe
   sb.scale = f.number("scale", 1.0, limits::scale);
   sb.totalMass = f.number("mass", 1.0, limits::bodyMass);
   def.totalMass = sb.totalMass;
-  def.velocity = f.vec3("velocity", Vec3::Zero(), limits::speedLimit);
+  sb.velocity = f.vec3("velocity", Vec3::Zero(), limits::speedLimit);
+  def.velocity = sb.velocity;
   Mode mode = Mode::Linear;
   const std::string linear = "linear";
   const std::string modeText = f.text("mode", &linear);
@@ -314,6 +316,7 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMe
         f.fail("pinned", "particle index " + i.dump() + " is out of range [0, 2147483647]");
       def.pinned.push_back(index);
     }
+    sb.pinned = def.pinned;
   }
   f.rejectUnknown();
 
@@ -571,8 +574,13 @@ Scene loadScene(const std::string& path) {
 
 namespace {
 
-json vec(const Vec3& v) {
-  return json::array({v.x(), v.y(), v.z()});
+// Saved files keep their keys in the order the shipped scenes use (an ordered object, not
+// nlohmann::json's sorted one), so a saved file reads like the one it came from and saving twice
+// gives the same bytes.
+using ordered_json = nlohmann::ordered_json;
+
+ordered_json vec(const Vec3& v) {
+  return ordered_json::array({v.x(), v.y(), v.z()});
 }
 
 // A path as written in the scene, re-expressed relative to the folder of the file being saved.
@@ -584,93 +592,137 @@ std::string rebase(const std::string& path, const std::string& fromDir, const st
   return ec || rel.empty() ? absolute.string() : rel.string();
 }
 
+// JSON text as people write scene files: two-space indents, and arrays of numbers, strings or
+// booleans on one line ("translation": [0, 1.2, 0]) instead of one element per line.
+void writeJson(std::ostream& out, const ordered_json& j, int indent) {
+  const std::string pad(size_t(indent + 2), ' '), end(size_t(indent), ' ');
+  if (j.is_object() && !j.empty()) {
+    out << "{\n";
+    size_t k = 0;
+    for (auto it = j.begin(); it != j.end(); ++it, ++k) {
+      out << pad << ordered_json(it.key()).dump() << ": ";
+      writeJson(out, it.value(), indent + 2);
+      out << (k + 1 < j.size() ? ",\n" : "\n");
+    }
+    out << end << "}";
+  } else if (j.is_array() && !j.empty()) {
+    const bool flat = std::none_of(
+        j.begin(), j.end(), [](const ordered_json& e) { return e.is_structured() && !e.empty(); });
+    if (flat) {
+      out << "[";
+      for (size_t k = 0; k < j.size(); ++k) out << (k ? ", " : "") << j[k].dump();
+      out << "]";
+      return;
+    }
+    out << "[\n";
+    for (size_t k = 0; k < j.size(); ++k) {
+      out << pad;
+      writeJson(out, j[k], indent + 2);
+      out << (k + 1 < j.size() ? ",\n" : "\n");
+    }
+    out << end << "]";
+  } else {
+    out << j.dump();
+  }
+}
+
+ordered_json colliderJson(const Collider& c) {
+  ordered_json j;
+  j["type"] = colliderShapeName(c.shape);
+  switch (c.shape) {
+    case Collider::Shape::Plane:
+      j["normal"] = vec(c.normal);
+      j["offset"] = c.offset;
+      break;
+    case Collider::Shape::Box:
+      j["centre"] = vec(c.centre);
+      j["halfExtents"] = vec(c.halfExtents);
+      j["rotationDegrees"] = vec(c.rotation.eulerAngles(2, 1, 0).reverse() * (180.0 / M_PI));
+      break;
+    case Collider::Shape::Sphere:
+      j["centre"] = vec(c.centre);
+      j["radius"] = c.radius;
+      break;
+    case Collider::Shape::Capsule:
+      j["a"] = vec(c.centre - c.axis);
+      j["b"] = vec(c.centre + c.axis);
+      j["radius"] = c.radius;
+      break;
+  }
+  j["friction"] = c.friction;
+  j["restitution"] = c.restitution;
+  return j;
+}
+
+ordered_json bodyJson(const World& w, const SceneBody& b, const std::string& fromDir,
+                      const std::string& toDir) {
+  const BodyParams& p = w.params(b.handle);
+  ordered_json j;
+  j["name"] = w.name(b.handle);
+  if (b.autoCage) {
+    j["cage"] = {
+        {"auto", true}, {"vertices", b.autoCage->vertices}, {"tightness", b.autoCage->tightness}};
+  } else {
+    j["mesh"] = rebase(b.meshPath, fromDir, toDir);
+  }
+  if (b.render) j["renderMesh"] = rebase(b.render->path, fromDir, toDir);
+  if (b.interiorSpacing > 0.0) j["interior"] = {{"spacing", b.interiorSpacing}};
+  j["translation"] = vec(b.translation);
+  j["rotationDegrees"] = vec(b.rotationDegrees);
+  j["scale"] = b.scale;
+  j["mass"] = b.totalMass;
+  if (b.velocity != Vec3::Zero()) j["velocity"] = vec(b.velocity);
+  j["mode"] = modeName(p.mode);
+  j["alpha"] = p.alpha;
+  j["beta"] = p.beta;
+  j["preserveVolume"] = p.preserveVolume;
+  j["damping"] = p.damping;
+  j["restitution"] = p.restitution;
+  j["contact"] = b.contact;
+  j["plasticity"] = {
+      {"yield", p.plasticity.yield}, {"creep", p.plasticity.creep}, {"max", p.plasticity.max}};
+  const ClusterDef& c = w.clusterDef(b.handle);
+  ordered_json cj;
+  cj["kind"] = clusterKindName(c.kind);
+  if (c.kind == ClusterDef::Kind::Grid) {
+    cj["cellSize"] = c.cellSize;
+    cj["overlap"] = c.overlap;
+  } else if (c.kind == ClusterDef::Kind::Explicit) {
+    cj["clusters"] = c.clusters;
+  }
+  j["clusters"] = cj;
+  if (!b.pinned.empty()) j["pinned"] = b.pinned;
+  return j;
+}
+
 }  // namespace
 
 void saveScene(const Scene& scene, const std::string& path) {
   const World& w = scene.world;
   const std::string fromDir = fs::path(scene.path).parent_path().string();
   const std::string toDir = fs::path(path).parent_path().string();
-  json root;
-  root["world"] = {{"gravity", vec(w.settings().gravity)},
-                   {"timeStep", w.settings().timeStep},
-                   {"substeps", w.settings().substeps},
-                   {"maxSubstep", w.settings().maxSubstep},
-                   {"bodyContact", w.settings().bodyContact},
-                   {"contactFriction", w.settings().contactFriction},
-                   {"restitutionThreshold", w.settings().restitutionThreshold},
-                   {"rollingResistance", w.settings().rollingResistance},
-                   {"sleep", w.settings().sleep}};
-  json colliders = json::array();
-  for (const Collider& c : w.colliders()) {
-    json j = {{"type", colliderShapeName(c.shape)},
-              {"friction", c.friction},
-              {"restitution", c.restitution}};
-    switch (c.shape) {
-      case Collider::Shape::Plane:
-        j["normal"] = vec(c.normal);
-        j["offset"] = c.offset;
-        break;
-      case Collider::Shape::Box:
-        j["centre"] = vec(c.centre);
-        j["halfExtents"] = vec(c.halfExtents);
-        j["rotationDegrees"] = vec(c.rotation.eulerAngles(2, 1, 0).reverse() * (180.0 / M_PI));
-        break;
-      case Collider::Shape::Sphere:
-        j["centre"] = vec(c.centre);
-        j["radius"] = c.radius;
-        break;
-      case Collider::Shape::Capsule:
-        j["a"] = vec(c.centre - c.axis);
-        j["b"] = vec(c.centre + c.axis);
-        j["radius"] = c.radius;
-        break;
-    }
-    colliders.push_back(j);
-  }
-  root["colliders"] = colliders;
-  json bodies = json::array();
-  for (const SceneBody& b : scene.bodies) {
-    if (!w.contains(b.handle)) continue;
-    const BodyParams& p = w.params(b.handle);
-    json j = {{"name", w.name(b.handle)},
-              {"translation", vec(b.translation)},
-              {"rotationDegrees", vec(b.rotationDegrees)},
-              {"scale", b.scale},
-              {"mass", b.totalMass},
-              {"mode", modeName(p.mode)},
-              {"alpha", p.alpha},
-              {"beta", p.beta},
-              {"preserveVolume", p.preserveVolume},
-              {"damping", p.damping},
-              {"restitution", p.restitution},
-              {"contact", b.contact},
-              {"plasticity",
-               {{"yield", p.plasticity.yield},
-                {"creep", p.plasticity.creep},
-                {"max", p.plasticity.max}}}};
-    if (b.autoCage) {
-      j["cage"] = {
-          {"auto", true}, {"vertices", b.autoCage->vertices}, {"tightness", b.autoCage->tightness}};
-    } else {
-      j["mesh"] = rebase(b.meshPath, fromDir, toDir);
-    }
-    if (b.render) j["renderMesh"] = rebase(b.render->path, fromDir, toDir);
-    if (b.interiorSpacing > 0.0) j["interior"] = {{"spacing", b.interiorSpacing}};
-    const ClusterDef& c = w.clusterDef(b.handle);
-    json cj = {{"kind", clusterKindName(c.kind)}};
-    if (c.kind == ClusterDef::Kind::Grid) {
-      cj["cellSize"] = c.cellSize;
-      cj["overlap"] = c.overlap;
-    } else if (c.kind == ClusterDef::Kind::Explicit) {
-      cj["clusters"] = c.clusters;
-    }
-    j["clusters"] = cj;
-    bodies.push_back(j);
-  }
-  root["bodies"] = bodies;
+  const WorldSettings& s = w.settings();
+  ordered_json root;
+  root["world"] = {{"gravity", vec(s.gravity)},
+                   {"timeStep", s.timeStep},
+                   {"substeps", s.substeps},
+                   {"maxSubstep", s.maxSubstep},
+                   {"bodyContact", s.bodyContact},
+                   {"contactFriction", s.contactFriction},
+                   {"restitutionThreshold", s.restitutionThreshold},
+                   {"rollingResistance", s.rollingResistance},
+                   {"sleep", s.sleep}};
+  root["colliders"] = ordered_json::array();
+  for (const Collider& c : w.colliders()) root["colliders"].push_back(colliderJson(c));
+  root["bodies"] = ordered_json::array();
+  for (const SceneBody& b : scene.bodies)
+    if (w.contains(b.handle)) root["bodies"].push_back(bodyJson(w, b, fromDir, toDir));
 
   try {
-    writeFileAtomic(path, [&](std::ostream& out) { out << root.dump(2) << "\n"; });
+    writeFileAtomic(path, [&](std::ostream& out) {
+      writeJson(out, root, 0);
+      out << "\n";
+    });
   } catch (const FileError& e) {
     throw SceneError(e.what());
   }
@@ -697,6 +749,15 @@ bool Scene::refreshRenderVertices(int body, PointsRowMajor& out, bool& currentWh
 const std::vector<std::array<int, 3>>& Scene::renderTriangles(int body) const {
   const SceneBody& b = bodies.at(size_t(body));
   return b.render ? b.render->triangles : b.cageTriangles;
+}
+
+bool isShippedScene(const std::string& path) {
+  if (path.empty()) return false;
+  std::error_code ec;
+  const fs::path folder = fs::weakly_canonical(fs::path(SOFTBODY_ASSET_DIR) / "scenes", ec);
+  if (ec) return false;
+  const fs::path file = fs::weakly_canonical(fs::absolute(path, ec), ec);
+  return !ec && file.parent_path() == folder;
 }
 
 std::string defaultScenePath() {

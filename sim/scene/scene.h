@@ -60,7 +60,9 @@ struct SceneBody {
   Vec3 rotationDegrees = Vec3::Zero();  // XYZ Euler angles, degrees
   double scale = 1.0;
   double totalMass = 1.0;
-  bool contact = true;  // the cage is the body's surface for body–body contact
+  Vec3 velocity = Vec3::Zero();  // initial velocity of every particle, m/s
+  std::vector<int> pinned;       // particle indices held in place, as written in the file
+  bool contact = true;           // the cage is the body's surface for body–body contact
 };
 
 struct Scene {
@@ -95,5 +97,8 @@ void saveScene(const Scene& scene, const std::string& path);
 
 // The scene opened when none is given.
 std::string defaultScenePath();
+// Whether `path` names a file in the folder of the shipped scenes (the viewer saves those only
+// when told to, so one click cannot rewrite them). Symlinks and ".." are resolved first.
+bool isShippedScene(const std::string& path);
 
 }  // namespace sb
