@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <filesystem>
 #include <thread>
 
 #include <GLFW/glfw3.h>
@@ -85,7 +86,7 @@ ViewerApp::ViewerApp(const ViewerOptions& options, Scene scene)
   showClusters_ = show.find(",clusters,") != std::string::npos;
   showGoals_ = show.find(",goals,") != std::string::npos;
   scenePathInput_ = scene_.path;
-  savePathInput_ = scene_.path;
+  savePathInput_ = savePathFor(scene_.path);
   screenshotPathInput_ = "softbody_screenshot.png";
 }
 
@@ -466,7 +467,7 @@ bool ViewerApp::openScene(const std::string& path) {
     frameCamera();
     errorMessage_.clear();
     statusMessage_ = "opened " + path;
-    savePathInput_ = path;
+    savePathInput_ = savePathFor(path);
     if (window_) glfwSetWindowTitle(window_, ("softbody - " + path).c_str());
     return true;
   } catch (const std::exception& e) {
@@ -477,7 +478,20 @@ bool ViewerApp::openScene(const std::string& path) {
   }
 }
 
+std::string ViewerApp::savePathFor(const std::string& scenePath) {
+  if (!isShippedScene(scenePath)) return scenePath;
+  return (std::filesystem::current_path() /
+          (std::filesystem::path(scenePath).stem().string() + "-edited.json"))
+      .string();
+}
+
 void ViewerApp::saveCurrentScene(const std::string& path) {
+  if (isShippedScene(path) && !overwriteShipped_) {
+    errorMessage_ = "cannot save scene: " + path +
+                    " is a shipped scene, read-only here: save it under another name (or tick "
+                    "'overwrite shipped scenes')";
+    return;
+  }
   try {
     saveScene(scene_, path);
     errorMessage_.clear();

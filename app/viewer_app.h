@@ -89,7 +89,11 @@ class ViewerApp {
   void drawOverlays(render::DebugDraw& draw);
   void drawColliders(render::DebugDraw& draw);
   bool openScene(const std::string& path);
+  // Saves to `path`; a shipped scene (isShippedScene) only while overwriteShipped_ is ticked.
   void saveCurrentScene(const std::string& path);
+  // Where Save writes by default: the scene itself, or for a shipped scene NAME-edited.json in
+  // the current folder.
+  static std::string savePathFor(const std::string& scenePath);
   bool takeScreenshot(const std::string& path);
   void collectEvents();
   void resetSimulation();
@@ -179,6 +183,7 @@ class ViewerApp {
   long eventCount_ = 0;
   std::string errorMessage_, statusMessage_;
   std::string scenePathInput_, savePathInput_, screenshotPathInput_;
+  bool overwriteShipped_ = false;  // Save may rewrite a shipped scene
   std::string screenshotRequest_;  // path of a screenshot to take after this frame is drawn
   // A --screenshot or --stats file could not be written: the program exits with code 1.
   bool outputFailed_ = false;

@@ -4,7 +4,9 @@
 // control stays where the hand expects it. Every control has a tooltip. Changes apply
 // immediately to the running World.
 #include <algorithm>
+#include <charconv>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 
 #include <imgui.h>
@@ -20,13 +22,22 @@ void tooltip(const char* text) {
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", text);
 }
 
+// The double nearest the shortest decimal that reads back as v: a slider set to 0.05 stores
+// 0.05, not 0.05000000074505806 (the float's exact value), so saved scenes read as typed.
+double shortestDouble(float v) {
+  char text[32];
+  const std::to_chars_result r = std::to_chars(text, text + sizeof(text) - 1, v);
+  *r.ptr = '\0';
+  return std::strtod(text, nullptr);
+}
+
 // A float slider bound to a double, with a tooltip. Returns true when the value changed.
 bool sliderDouble(const char* label, double* value, float lo, float hi, const char* format,
                   const char* help, ImGuiSliderFlags flags = 0) {
   float v = static_cast<float>(*value);
   const bool changed = ImGui::SliderFloat(label, &v, lo, hi, format, flags);
   tooltip(help);
-  if (changed) *value = static_cast<double>(v);
+  if (changed) *value = shortestDouble(v);
   return changed;
 }
 
@@ -170,7 +181,8 @@ void ViewerApp::drawWorldPanel() {
   float gravity[3] = {static_cast<float>(s.gravity.x()), static_cast<float>(s.gravity.y()),
                       static_cast<float>(s.gravity.z())};
   if (ImGui::DragFloat3("gravity", gravity, 0.05f, -50.0f, 50.0f, "%.2f")) {
-    s.gravity = Vec3(gravity[0], gravity[1], gravity[2]);
+    s.gravity =
+        Vec3(shortestDouble(gravity[0]), shortestDouble(gravity[1]), shortestDouble(gravity[2]));
     changed = true;
   }
   tooltip("Gravity acceleration in m/s^2 (x, y, z). Drag a number or double-click to type.");
@@ -334,14 +346,14 @@ void ViewerApp::drawBodyPanel(int body) {
                          ImGuiSliderFlags_Logarithmic);
       if (ImGui::IsItemDeactivatedAfterEdit()) rebuild = true;
       tooltip("Edge of a grid cell in metres; applied when you release the slider.");
-      clusters.cellSize = cell;
+      clusters.cellSize = shortestDouble(cell);
       float overlap = static_cast<float>(clusters.overlap);
       ImGui::SliderFloat("overlap (m)", &overlap, 0.0f, size * 0.5f, "%.3f");
       if (ImGui::IsItemDeactivatedAfterEdit()) rebuild = true;
       tooltip(
           "Each cell also takes particles within this distance: couples neighbouring "
           "clusters. Applied when you release the slider.");
-      clusters.overlap = overlap;
+      clusters.overlap = shortestDouble(overlap);
     }
     if (rebuild) {
       try {
@@ -417,6 +429,11 @@ void ViewerApp::drawScenePanel() {
   tooltip(
       "Write the scene with the current world settings and body parameters "
       "(atomic: a temporary file renamed over the target).");
+  ImGui::SameLine();
+  ImGui::Checkbox("overwrite shipped scenes", &overwriteShipped_);
+  tooltip(
+      "The scenes that come with softbody are read-only here (Save proposes NAME-edited.json\n"
+      "in the current folder instead); tick to let Save rewrite them.");
   ImGui::InputText("screenshot", &screenshotPathInput_);
   tooltip("PNG path the Screenshot button writes to.");
 }

@@ -2,7 +2,8 @@
 # The panel stays put (xdotool, inside Xvfb): the sliders alpha, beta, c_yield and c_creep of the
 # first body are at the same pixels before and after a reset (R) and after an error message
 # (messages go to the status bar along the bottom of the 3D view); Ctrl+click on alpha after the
-# reset edits alpha; typing into a text field fires no shortcut; H hides the panel.
+# reset edits alpha; typing into a text field fires no shortcut; Save does not rewrite a shipped
+# scene and writes numbers as typed; H hides the panel.
 # usage: panel_test.sh SOFTBODY CHECK WORKDIR
 SOFTBODY=$1 CHECK=$2 WORK=$3
 source "$(dirname "$0")/common.sh"
@@ -10,6 +11,7 @@ enter_xvfb "$@"
 
 printf '{ "bodies": [ { "name": "b", "mesh": "x.obj", "alpha": 3 } ] }\n' >"$WORK/bad_scene.json"
 live=$WORK/live.json
+cd "$WORK"  # the viewer's current folder: where Save proposes to put an edited shipped scene
 "$SOFTBODY" ${SCENE_ARGS[@]+"${SCENE_ARGS[@]}"} --frames 100000 --stats "$live" --stats-every 3 \
   >"$WORK/viewer.log" 2>&1 &
 VIEWER_PID=$!
@@ -71,14 +73,48 @@ xdotool click 1
 sleep 0.15
 xdotool keyup ctrl
 sleep 0.1
-replace_text "0.25"
+replace_text "0.05"
 xdotool keydown Return  # held for a moment: ImGui 1.86 polls key state once per frame
 sleep 0.15
 xdotool keyup Return
 next_frames "$live" 5
 alpha=$("$CHECK" get "$live" /bodies/0/params/alpha)
-echo "alpha after Ctrl+click and typing 0.25: $alpha"
-awk -v a="$alpha" 'BEGIN { exit !(a > 0.2499 && a < 0.2501) }' || fail "Ctrl+click on alpha did not edit alpha"
+echo "alpha after Ctrl+click and typing 0.05: $alpha"
+[ "$alpha" = 0.05 ] || fail "Ctrl+click on alpha did not set alpha to 0.05"
+
+# Save: a shipped scene is saved as NAME-edited.json in the current folder, with the numbers as
+# typed (0.05, not the float's 0.05000000074505806); the shipped file is not touched, and naming
+# it as the target is refused with a message.
+scene=$("$CHECK" get "$live" /scenePath)
+shipped=false
+case "$scene" in */assets/scenes/*.json) shipped=true ;; esac
+save_path=$("$CHECK" get "$live" /savePath)
+echo "scene $scene (shipped: $shipped), Save proposes $save_path"
+if [ "$shipped" = true ]; then
+  [ "$save_path" = "$WORK/$(basename "$scene" .json)-edited.json" ] ||
+    fail "Save proposes $save_path for a shipped scene"
+  sum_before=$(sha256sum <"$scene")
+  rm -f "$save_path"
+  click_widget "$live" save
+  next_frames "$live" 5
+  [ -s "$save_path" ] || fail "Save did not write $save_path"
+  grep -q '"alpha": 0.05,' "$save_path" || fail "the saved alpha is not written as 0.05"
+  # A float widened to double: a long run of 0s or 9s with more digits after it.
+  noise='[0-9]\.[0-9]*(0{6}|9{6})[0-9]+'
+  if grep -Eq "$noise" "$save_path"; then
+    grep -En "$noise" "$save_path" | head -3
+    fail "the saved scene has float noise in its numbers"
+  fi
+  click_widget "$live" savePath
+  replace_text "$scene"
+  click_widget "$live" save
+  next_frames "$live" 5
+  case "$("$CHECK" get "$live" /error)" in
+    *"shipped scene"*) ;;
+    *) fail "saving over the shipped scene gave no error" ;;
+  esac
+  [ "$(sha256sum <"$scene")" = "$sum_before" ] || fail "the shipped scene was rewritten"
+fi
 
 # H hides the panel and shows it again.
 in_view
@@ -91,4 +127,4 @@ xdotool key h
 next_frames "$live" 5
 [ "$("$CHECK" get "$live" /panelVisible)" = true ] || fail "H did not show the panel again"
 [ "$(positions "$live")" = "$before" ] || fail "the sliders moved after hiding and showing the panel"
-echo "PASS: the panel's sliders stay put through R and an error; Ctrl+click edits alpha; typing in a field fires no shortcut; H hides the panel"
+echo "PASS: the panel's sliders stay put through R and an error; Ctrl+click edits alpha; typing in a field fires no shortcut; shipped scenes are saved elsewhere; H hides the panel"
