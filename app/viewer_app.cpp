@@ -87,6 +87,7 @@ ViewerApp::ViewerApp(const ViewerOptions& options, Scene scene)
   showGoals_ = show.find(",goals,") != std::string::npos;
   scenePathInput_ = scene_.path;
   savePathInput_ = savePathFor(scene_.path);
+  savedText_ = sceneText(scene_, scene_.path);
   screenshotPathInput_ = "softbody_screenshot.png";
 }
 
@@ -468,6 +469,7 @@ bool ViewerApp::openScene(const std::string& path) {
     errorMessage_.clear();
     statusMessage_ = "opened " + path;
     savePathInput_ = savePathFor(path);
+    savedText_ = sceneText(scene_, scene_.path);
     if (window_) glfwSetWindowTitle(window_, ("softbody - " + path).c_str());
     return true;
   } catch (const std::exception& e) {
@@ -485,20 +487,39 @@ std::string ViewerApp::savePathFor(const std::string& scenePath) {
       .string();
 }
 
-void ViewerApp::saveCurrentScene(const std::string& path) {
+bool ViewerApp::saveCurrentScene(const std::string& path) {
   if (isShippedScene(path) && !overwriteShipped_) {
     errorMessage_ = "cannot save scene: " + path +
                     " is a shipped scene, read-only here: save it under another name (or tick "
                     "'overwrite shipped scenes')";
-    return;
+    return false;
   }
   try {
     saveScene(scene_, path);
     errorMessage_.clear();
     statusMessage_ = "saved " + path;
+    savedText_ = sceneText(scene_, scene_.path);
+    return true;
   } catch (const std::exception& e) {
     errorMessage_ = std::string("cannot save scene: ") + e.what();
+    return false;
   }
+}
+
+bool ViewerApp::hasUnsavedChanges() const {
+  return sceneText(scene_, scene_.path) != savedText_;
+}
+
+void ViewerApp::requestQuit() {
+  if (hasUnsavedChanges()) {
+    quitDialog_ = true;
+  } else {
+    quit();
+  }
+}
+
+void ViewerApp::quit() {
+  glfwSetWindowShouldClose(window_, GLFW_TRUE);
 }
 
 int ViewerApp::run() {

@@ -90,7 +90,13 @@ class ViewerApp {
   void drawColliders(render::DebugDraw& draw);
   bool openScene(const std::string& path);
   // Saves to `path`; a shipped scene (isShippedScene) only while overwriteShipped_ is ticked.
-  void saveCurrentScene(const std::string& path);
+  // Returns whether it saved (else errorMessage_ says why).
+  bool saveCurrentScene(const std::string& path);
+  // Settings or parameters differ from those last opened or saved.
+  bool hasUnsavedChanges() const;
+  // Esc, Q or the window's close button: quits, or first asks when there are unsaved changes.
+  void requestQuit();
+  void quit();  // closes the window: run() returns after this frame
   // Where Save writes by default: the scene itself, or for a shipped scene NAME-edited.json in
   // the current folder.
   static std::string savePathFor(const std::string& scenePath);
@@ -121,6 +127,7 @@ class ViewerApp {
   void drawUi();
   void drawPanel();
   void drawStatusBar();
+  void drawQuitDialog();
   void drawBodyPanel(int body);
   void drawWorldPanel();
   void drawTimingPanel();
@@ -184,6 +191,9 @@ class ViewerApp {
   std::string errorMessage_, statusMessage_;
   std::string scenePathInput_, savePathInput_, screenshotPathInput_;
   bool overwriteShipped_ = false;  // Save may rewrite a shipped scene
+  // sceneText(scene_, scene_.path) when the scene was opened or last saved.
+  std::string savedText_;
+  bool quitDialog_ = false;        // the "unsaved changes" dialog is open
   std::string screenshotRequest_;  // path of a screenshot to take after this frame is drawn
   // A --screenshot or --stats file could not be written: the program exits with code 1.
   bool outputFailed_ = false;

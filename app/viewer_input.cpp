@@ -49,6 +49,11 @@ void ViewerApp::installCallbacks() {
   glfwSetKeyCallback(window_, [](GLFWwindow* w, int key, int, int action, int mods) {
     appOf(w)->onKey(key, action, mods);
   });
+  // The window manager's close button asks like Esc/Q does.
+  glfwSetWindowCloseCallback(window_, [](GLFWwindow* w) {
+    glfwSetWindowShouldClose(w, GLFW_FALSE);
+    appOf(w)->requestQuit();
+  });
 }
 
 ViewerApp::ViewRect ViewerApp::viewRect() const {
@@ -173,7 +178,7 @@ void ViewerApp::onKey(int key, int action, int mods) {
       break;
     case GLFW_KEY_ESCAPE:
     case GLFW_KEY_Q:
-      if (press) glfwSetWindowShouldClose(window_, GLFW_TRUE);
+      if (press) requestQuit();
       break;
     default:
       break;

@@ -52,6 +52,7 @@ bool ViewerApp::writeStats(const std::string& path) const {
   j["status"] = statusMessage_;
   j["scenePath"] = scene_.path;
   j["savePath"] = savePathInput_;
+  j["quitDialog"] = quitDialog_;
   json widgets = json::object();
   for (const auto& [name, r] : widgetRects_) widgets[name] = {r[0], r[1], r[2], r[3]};
   j["widgets"] = widgets;

@@ -52,6 +52,37 @@ void ViewerApp::drawUi() {
   widgetRects_.clear();
   if (!panelHidden_) drawPanel();
   drawStatusBar();
+  drawQuitDialog();
+}
+
+void ViewerApp::drawQuitDialog() {
+  const char* title = "Unsaved changes";
+  if (quitDialog_ && !ImGui::IsPopupOpen(title)) ImGui::OpenPopup(title);
+  if (!ImGui::BeginPopupModal(title, nullptr, ImGuiWindowFlags_AlwaysAutoResize)) return;
+  ImGui::Text("The settings or parameters changed since the scene was opened or saved.");
+  ImGui::Text("Save to: %s", savePathInput_.c_str());
+  bool close = false;
+  if (ImGui::Button("Save and quit")) {
+    close = saveCurrentScene(savePathInput_);
+    if (close) quit();
+  }
+  recordWidget("quitSave");
+  ImGui::SameLine();
+  if (ImGui::Button("Quit without saving")) {
+    close = true;
+    quit();
+  }
+  recordWidget("quitDiscard");
+  ImGui::SameLine();
+  if (ImGui::Button("Cancel")) close = true;
+  recordWidget("quitCancel");
+  if (!errorMessage_.empty())
+    ImGui::TextColored(ImVec4(1.0f, 0.4f, 0.35f, 1.0f), "%s", errorMessage_.c_str());
+  if (close) {
+    quitDialog_ = false;
+    ImGui::CloseCurrentPopup();
+  }
+  ImGui::EndPopup();
 }
 
 void ViewerApp::drawPanel() {

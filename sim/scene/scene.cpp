@@ -697,7 +697,7 @@ ordered_json bodyJson(const World& w, const SceneBody& b, const std::string& fro
 
 }  // namespace
 
-void saveScene(const Scene& scene, const std::string& path) {
+std::string sceneText(const Scene& scene, const std::string& path) {
   const World& w = scene.world;
   const std::string fromDir = fs::path(scene.path).parent_path().string();
   const std::string toDir = fs::path(path).parent_path().string();
@@ -717,12 +717,16 @@ void saveScene(const Scene& scene, const std::string& path) {
   root["bodies"] = ordered_json::array();
   for (const SceneBody& b : scene.bodies)
     if (w.contains(b.handle)) root["bodies"].push_back(bodyJson(w, b, fromDir, toDir));
+  std::ostringstream out;
+  writeJson(out, root, 0);
+  out << "\n";
+  return out.str();
+}
 
+void saveScene(const Scene& scene, const std::string& path) {
+  const std::string text = sceneText(scene, path);
   try {
-    writeFileAtomic(path, [&](std::ostream& out) {
-      writeJson(out, root, 0);
-      out << "\n";
-    });
+    writeFileAtomic(path, [&](std::ostream& out) { out << text; });
   } catch (const FileError& e) {
     throw SceneError(e.what());
   }

@@ -94,6 +94,9 @@ Scene parseScene(const std::string& jsonText, const std::string& name, const std
 // Writes the scene with the world's current settings and body parameters. Atomic: writes a
 // temporary file beside the target and renames it. Throws SceneError when it cannot write.
 void saveScene(const Scene& scene, const std::string& path);
+// The text saveScene writes to `path` (mesh paths relative to path's folder). Two scenes with
+// the same text have the same settings and parameters (the state of the bodies is not in it).
+std::string sceneText(const Scene& scene, const std::string& path);
 
 // The scene opened when none is given.
 std::string defaultScenePath();

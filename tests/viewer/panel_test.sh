@@ -3,7 +3,7 @@
 # first body are at the same pixels before and after a reset (R) and after an error message
 # (messages go to the status bar along the bottom of the 3D view); Ctrl+click on alpha after the
 # reset edits alpha; typing into a text field fires no shortcut; Save does not rewrite a shipped
-# scene and writes numbers as typed; H hides the panel.
+# scene and writes numbers as typed; H hides the panel; Q/Esc with unsaved changes ask first.
 # usage: panel_test.sh SOFTBODY CHECK WORKDIR
 SOFTBODY=$1 CHECK=$2 WORK=$3
 source "$(dirname "$0")/common.sh"
@@ -127,4 +127,43 @@ xdotool key h
 next_frames "$live" 5
 [ "$("$CHECK" get "$live" /panelVisible)" = true ] || fail "H did not show the panel again"
 [ "$(positions "$live")" = "$before" ] || fail "the sliders moved after hiding and showing the panel"
-echo "PASS: the panel's sliders stay put through R and an error; Ctrl+click edits alpha; typing in a field fires no shortcut; shipped scenes are saved elsewhere; H hides the panel"
+# Quitting with unsaved changes asks: set alpha again, then Q opens the dialog and the viewer
+# keeps running; Cancel closes it; Esc opens it again; "Quit without saving" ends the program
+# (exit 0) and leaves the saved file as it was.
+[ "$("$CHECK" get "$live" /quitDialog)" = false ] || fail "the quit dialog is open already"
+read -r x y < <("$CHECK" click-point "$live" alpha)
+xdotool mousemove "$x" "$y"
+sleep 0.15
+xdotool keydown ctrl
+sleep 0.1
+xdotool click 1
+sleep 0.15
+xdotool keyup ctrl
+sleep 0.1
+replace_text "0.3"
+xdotool keydown Return
+sleep 0.15
+xdotool keyup Return
+next_frames "$live" 5
+in_view
+xdotool key q
+next_frames "$live" 5
+[ "$("$CHECK" get "$live" /quitDialog)" = true ] || fail "Q with unsaved changes did not ask"
+kill -0 "$VIEWER_PID" 2>/dev/null || fail "the viewer quit with unsaved changes"
+click_widget "$live" quitCancel
+next_frames "$live" 5
+[ "$("$CHECK" get "$live" /quitDialog)" = false ] || fail "Cancel did not close the dialog"
+in_view
+xdotool key Escape
+next_frames "$live" 5
+[ "$("$CHECK" get "$live" /quitDialog)" = true ] || fail "Esc with unsaved changes did not ask"
+saved_before=$( [ -f "${save_path:-}" ] && sha256sum <"$save_path" || echo none)
+click_widget "$live" quitDiscard
+code=0
+wait "$VIEWER_PID" || code=$?
+VIEWER_PID=
+[ "$code" -eq 0 ] || fail "the viewer exited with code $code after Quit without saving"
+saved_after=$( [ -f "${save_path:-}" ] && sha256sum <"$save_path" || echo none)
+[ "$saved_after" = "$saved_before" ] || fail "Quit without saving wrote the scene"
+
+echo "PASS: the panel's sliders stay put through R and an error; Ctrl+click edits alpha; typing in a field fires no shortcut; shipped scenes are saved elsewhere; H hides the panel; quitting with unsaved changes asks"
