@@ -522,6 +522,14 @@ void ViewerApp::quit() {
   glfwSetWindowShouldClose(window_, GLFW_TRUE);
 }
 
+bool ViewerApp::timedStatsWrite() {
+  const Clock::time_point start = Clock::now();
+  const bool written = writeStats(options_.statsPath);
+  statsMsSum_ += millisecondsSince(start);
+  ++statsWrites_;
+  return written;
+}
+
 int ViewerApp::run() {
   start_ = Clock::now();
   Clock::time_point nextFrame = start_;
@@ -596,7 +604,7 @@ int ViewerApp::run() {
     ++frame_;
 
     if (!options_.statsPath.empty() && options_.statsEvery > 0 &&
-        frame_ % options_.statsEvery == 0 && !writeStats(options_.statsPath))
+        frame_ % options_.statsEvery == 0 && !timedStatsWrite())
       outputFailed_ = true;
     if (options_.frames > 0 && frame_ >= options_.frames)
       glfwSetWindowShouldClose(window_, GLFW_TRUE);
@@ -612,7 +620,7 @@ int ViewerApp::run() {
     }
   }
   endDrag();
-  if (!options_.statsPath.empty() && !writeStats(options_.statsPath)) outputFailed_ = true;
+  if (!options_.statsPath.empty() && !timedStatsWrite()) outputFailed_ = true;
   const double seconds = std::chrono::duration<double>(Clock::now() - start_).count();
   const double frames = static_cast<double>(std::max<long>(timings_.frames, 1));
   std::printf(
@@ -620,6 +628,9 @@ int ViewerApp::run() {
       "render %.3f ms\n",
       timings_.frames, seconds, static_cast<double>(timings_.frames) / std::max(seconds, 1e-9),
       timings_.simSum / frames, timings_.deformSum / frames, timings_.renderSum / frames);
+  if (statsWrites_ > 0)
+    std::printf("softbody: %ld stats file writes, %.3f ms each\n", statsWrites_,
+                statsMsSum_ / static_cast<double>(statsWrites_));
   if (outputFailed_) {
     std::fprintf(stderr,
                  "softbody: an output asked for on the command line could not be written "

@@ -136,6 +136,8 @@ class ViewerApp {
   // ---- viewer_stats.cpp ----
   // Writes the stats file (atomically); false, with the reason on stderr, when it cannot.
   bool writeStats(const std::string& path) const;
+  // writeStats(options_.statsPath), its wall time added to statsMsSum_ (printed at exit).
+  bool timedStatsWrite();
 
   ViewerOptions options_;
   Scene scene_;
@@ -197,6 +199,8 @@ class ViewerApp {
   std::string screenshotRequest_;  // path of a screenshot to take after this frame is drawn
   // A --screenshot or --stats file could not be written: the program exits with code 1.
   bool outputFailed_ = false;
+  long statsWrites_ = 0;
+  double statsMsSum_ = 0.0;
 
   FrameTimings timings_;
   // Window-pixel rectangles (x0, y0, x1, y1) of named panel controls in the last frame, written

@@ -40,6 +40,10 @@ class OrbitCamera {
   Ray rayThroughPixel(float x, float y, float width, float height) const;
   // Window pixel of a world point; returns false when it is behind the eye.
   bool project(const glm::vec3& point, float width, float height, glm::vec2* pixel) const;
+  // The same for many points: viewProjection = projection(width / height) * view(), computed
+  // once by the caller (project() recomputes both matrices for every point).
+  static bool projectWith(const glm::mat4& viewProjection, const glm::vec3& point, float width,
+                          float height, glm::vec2* pixel);
 };
 
 }  // namespace sb::render
