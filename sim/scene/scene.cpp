@@ -560,6 +560,28 @@ Scene parseScene(const std::string& text, const std::string& name, const std::st
   return scene;
 }
 
+int addSceneBody(Scene& scene, const std::string& bodyJson, const std::string& name,
+                 const std::string& baseDir) {
+  const json root = parseJson(bodyJson, name);
+  Fields f(root, "", name);
+  BodyDef def;
+  BoundMeshes bound;
+  SceneBody body = parseBody(f, baseDir, def, bound);
+  try {
+    body.handle = scene.world.addBody(def);
+  } catch (const std::invalid_argument& e) {
+    f.fail("", e.what());
+  }
+  scene.bodies.push_back(std::move(body));
+  return static_cast<int>(scene.bodies.size()) - 1;
+}
+
+void removeSceneBody(Scene& scene, int body) {
+  const SceneBody& b = scene.bodies.at(size_t(body));
+  scene.world.removeBody(b.handle);
+  scene.bodies.erase(scene.bodies.begin() + body);
+}
+
 Scene loadScene(const std::string& path) {
   std::string text;
   try {

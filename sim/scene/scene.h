@@ -91,6 +91,13 @@ Scene loadScene(const std::string& path);
 // Strict JSON: a key given twice in one object, a number beyond double range or an integer
 // index beyond int range is an error naming the line and the field (bodies[2].scale).
 Scene parseScene(const std::string& jsonText, const std::string& name, const std::string& baseDir);
+// Adds one body to the scene, given as the JSON text of a body object of a scene file (the same
+// fields, defaults and checks; relative mesh paths resolved against baseDir). Returns its index
+// in scene.bodies. Throws SceneError ("NAME: FIELD: REASON"); the scene is unchanged then.
+int addSceneBody(Scene& scene, const std::string& bodyJson, const std::string& name,
+                 const std::string& baseDir);
+// Removes body i from the scene and its World; the bodies after it move down one index.
+void removeSceneBody(Scene& scene, int body);
 // Writes the scene with the world's current settings and body parameters. Atomic: writes a
 // temporary file beside the target and renames it. Throws SceneError when it cannot write.
 void saveScene(const Scene& scene, const std::string& path);

@@ -382,3 +382,47 @@ TEST(SceneRunner, MeshesOfSleepingBodiesStayCurrent) {
 
 }  // namespace
 }  // namespace sb
+
+namespace sb {
+namespace {
+
+// Bodies added to and removed from a loaded scene, as the viewer does for a mesh dropped on it:
+// the same fields and checks as in a scene file; a bad body leaves the scene as it was.
+TEST(Scene, BodiesAreAddedAndRemovedOneAtATime) {
+  Scene scene = loadScene(defaultScenePath());
+  const size_t before = scene.bodies.size();
+  const std::string dir = std::string(SOFTBODY_ASSET_DIR) + "/meshes";
+  const int added = addSceneBody(scene, R"({"name": "extra", "mesh": "bunny_cage.obj",
+      "translation": [0, 3, 0], "scale": 0.1, "mode": "rigid", "alpha": 1})",
+                                 "dropped", dir);
+  ASSERT_EQ(scene.bodies.size(), before + 1);
+  EXPECT_EQ(added, int(before));
+  const BodyHandle h = scene.bodies[size_t(added)].handle;
+  EXPECT_EQ(scene.world.name(h), "extra");
+  EXPECT_EQ(scene.world.params(h).mode, Mode::Rigid);
+  EXPECT_NEAR(scene.world.centreOfMass(h).y(), 3.0, 0.6);  // the file's origin is not its centre
+  for (int s = 0; s < 60; ++s) scene.world.step();
+  EXPECT_LT(scene.world.centreOfMass(h).y(), 3.0);  // it falls with the rest
+
+  const std::uint64_t hash = scene.world.stateHash();
+  try {
+    addSceneBody(scene, R"({"mesh": "bunny_cage.obj", "alpha": 3})", "dropped", dir);
+    ADD_FAILURE() << "alpha 3 was accepted";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("dropped: alpha"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(scene.bodies.size(), before + 1);
+  EXPECT_EQ(scene.world.stateHash(), hash);
+
+  const BodyHandle first = scene.bodies[0].handle;
+  removeSceneBody(scene, 0);
+  ASSERT_EQ(scene.bodies.size(), before);
+  EXPECT_FALSE(scene.world.contains(first));
+  EXPECT_EQ(scene.world.name(scene.bodies.back().handle), "extra");
+  for (const SceneBody& b : scene.bodies) EXPECT_TRUE(scene.world.contains(b.handle));
+  for (int s = 0; s < 10; ++s) scene.world.step();
+  EXPECT_TRUE(scene.world.positions(scene.bodies.back().handle).allFinite());
+}
+
+}  // namespace
+}  // namespace sb
