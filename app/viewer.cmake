@@ -7,6 +7,7 @@ target_link_libraries(softbody PRIVATE nlohmann_json::nlohmann_json)
 if(SOFTBODY_BUILD_VIEWER)
   target_sources(softbody PRIVATE
     ${CMAKE_CURRENT_LIST_DIR}/viewer_app.cpp
+    ${CMAKE_CURRENT_LIST_DIR}/viewer_bodies.cpp
     ${CMAKE_CURRENT_LIST_DIR}/viewer_input.cpp
     ${CMAKE_CURRENT_LIST_DIR}/viewer_ui.cpp
     ${CMAKE_CURRENT_LIST_DIR}/viewer_stats.cpp

@@ -8,6 +8,7 @@
 #include <ctime>
 #include <filesystem>
 #include <thread>
+#include <utility>
 
 #include <GLFW/glfw3.h>
 #include <backends/imgui_impl_glfw.h>
@@ -563,6 +564,9 @@ int ViewerApp::run() {
       resetRequested_ = false;
       resetSimulation();
     }
+    // The body buttons act after the panel is drawn (the panel walks the bodies).
+    if (removeRequest_ >= 0) removeBody(std::exchange(removeRequest_, -1));
+    if (duplicateRequest_ >= 0) duplicateBody(std::exchange(duplicateRequest_, -1));
 
     const Clock::time_point simStart = Clock::now();
     const bool stepping = !paused_ || stepOnce_;

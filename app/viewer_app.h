@@ -105,6 +105,16 @@ class ViewerApp {
   void resetSimulation();
   float groundHeight() const;
 
+  // ---- viewer_bodies.cpp ----
+  // Files dropped on the window: scene files are opened, anything else added as a mesh body.
+  void onDrop(const std::vector<std::string>& paths);
+  // A soft body (linear, automatic cage) from the mesh file, sized and placed above the scene.
+  // False with errorMessage_ set when the file cannot be read or caged.
+  bool addBodyFromMesh(const std::string& path);
+  void removeBody(int body);
+  void duplicateBody(int body);  // the body as saved, lifted above the highest body
+  void bodiesChanged();          // rebuilds what the viewer keeps per body
+
   // ---- viewer_input.cpp ----
   void installCallbacks();
   void onMouseButton(int button, int action, int mods);
@@ -191,8 +201,9 @@ class ViewerApp {
   std::deque<std::string> eventLog_;
   long eventCount_ = 0;
   std::string errorMessage_, statusMessage_;
-  std::string scenePathInput_, savePathInput_, screenshotPathInput_;
-  bool overwriteShipped_ = false;  // Save may rewrite a shipped scene
+  std::string scenePathInput_, savePathInput_, screenshotPathInput_, addMeshPathInput_;
+  int removeRequest_ = -1, duplicateRequest_ = -1;  // body buttons, applied after the panel
+  bool overwriteShipped_ = false;                   // Save may rewrite a shipped scene
   // sceneText(scene_, scene_.path) when the scene was opened or last saved.
   std::string savedText_;
   bool quitDialog_ = false;        // the "unsaved changes" dialog is open

@@ -49,6 +49,9 @@ void ViewerApp::installCallbacks() {
   glfwSetKeyCallback(window_, [](GLFWwindow* w, int key, int, int action, int mods) {
     appOf(w)->onKey(key, action, mods);
   });
+  glfwSetDropCallback(window_, [](GLFWwindow* w, int count, const char** paths) {
+    appOf(w)->onDrop(std::vector<std::string>(paths, paths + count));
+  });
   // The window manager's close button asks like Esc/Q does.
   glfwSetWindowCloseCallback(window_, [](GLFWwindow* w) {
     glfwSetWindowShouldClose(w, GLFW_FALSE);

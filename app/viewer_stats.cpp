@@ -54,6 +54,7 @@ bool ViewerApp::writeStats(const std::string& path) const {
   j["scenePath"] = scene_.path;
   j["savePath"] = savePathInput_;
   j["quitDialog"] = quitDialog_;
+  j["bodyCount"] = scene_.bodies.size();
   json widgets = json::object();
   for (const auto& [name, r] : widgetRects_) widgets[name] = {r[0], r[1], r[2], r[3]};
   j["widgets"] = widgets;

@@ -395,6 +395,13 @@ void ViewerApp::drawBodyPanel(int body) {
       }
     }
     ImGui::Text("%d particles, %d clusters", world.particleCount(h), world.clusterCount(h));
+    if (ImGui::SmallButton("duplicate")) duplicateRequest_ = body;
+    recordWidget(("duplicate" + std::to_string(body)).c_str());
+    tooltip("Add a copy of this body (as it would be saved) above the scene.");
+    ImGui::SameLine();
+    if (ImGui::SmallButton("remove")) removeRequest_ = body;
+    recordWidget(("remove" + std::to_string(body)).c_str());
+    tooltip("Remove this body from the scene.");
     ImGui::TreePop();
   }
   ImGui::PopID();
@@ -465,6 +472,14 @@ void ViewerApp::drawScenePanel() {
   tooltip(
       "The scenes that come with softbody are read-only here (Save proposes NAME-edited.json\n"
       "in the current folder instead); tick to let Save rewrite them.");
+  ImGui::InputText("add mesh", &addMeshPathInput_);
+  recordWidget("addMeshPath");
+  tooltip(
+      "A mesh file (OBJ, OFF, PLY, STL) to add as a soft body with an automatic cage.\n"
+      "Dropping a mesh file on the window does the same.");
+  if (ImGui::Button("Add body")) addBodyFromMesh(addMeshPathInput_);
+  recordWidget("addMesh");
+  tooltip("Add the mesh above as a body (linear, alpha 0.5), sized and placed above the scene.");
   ImGui::InputText("screenshot", &screenshotPathInput_);
   tooltip("PNG path the Screenshot button writes to.");
 }
