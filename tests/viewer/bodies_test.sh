@@ -10,11 +10,7 @@ enter_xvfb "$@"
 
 live=$WORK/live.json
 cd "$WORK"
-"$SOFTBODY" ${SCENE_ARGS[@]+"${SCENE_ARGS[@]}"} --frames 100000 --stats "$live" --stats-every 3 \
-  >"$WORK/viewer.log" 2>&1 &
-VIEWER_PID=$!
-trap '[ -n "${VIEWER_PID:-}" ] && kill "$VIEWER_PID" 2>/dev/null || true' EXIT
-wait_for_frame "$live" 10
+start_live_viewer "$live"
 n0=$("$CHECK" get "$live" /bodyCount)
 mesh=$(dirname "$("$CHECK" get "$live" /scenePath)")/../meshes/bunny_cage.obj
 [ -f "$mesh" ] || fail "no mesh to add at $mesh"

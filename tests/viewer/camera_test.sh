@@ -7,11 +7,7 @@ SOFTBODY=$1 CHECK=$2 WORK=$3
 source "$(dirname "$0")/common.sh"
 enter_xvfb "$@"
 live=$WORK/live.json
-"$SOFTBODY" ${SCENE_ARGS[@]+"${SCENE_ARGS[@]}"} --frames 100000 --paused --stats "$live" --stats-every 3 \
-  >"$WORK/viewer.log" 2>&1 &
-VIEWER_PID=$!
-trap '[ -n "${VIEWER_PID:-}" ] && kill "$VIEWER_PID" 2>/dev/null || true' EXIT
-wait_for_frame "$live" 10
+start_live_viewer "$live" --paused
 
 camera() { "$CHECK" get "$live" "/camera/$1"; }
 right_drag() {  # right_drag X Y DX [MODIFIER]

@@ -44,6 +44,19 @@ snapshot() {
   cp "$1" "$3"
 }
 
+# start_live_viewer STATS [OPTION...]: starts the viewer on the test's scene in the background,
+# running (nearly) for ever and writing STATS every 3 frames; it is killed when the script exits.
+# Returns once frame 10 is reported.
+start_live_viewer() {
+  local stats=$1
+  shift
+  "$SOFTBODY" ${SCENE_ARGS[@]+"${SCENE_ARGS[@]}"} --frames 100000 --stats "$stats" --stats-every 3 \
+    "$@" >"$WORK/viewer.log" 2>&1 &
+  VIEWER_PID=$!
+  trap '[ -n "${VIEWER_PID:-}" ] && kill "$VIEWER_PID" 2>/dev/null || true' EXIT
+  wait_for_frame "$stats" 10
+}
+
 # finish_viewer: waits for the background viewer to exit and checks its exit code.
 finish_viewer() {
   local code=0
@@ -71,6 +84,25 @@ replace_text() {
   sleep 0.1
   xdotool type --delay 15 "$1"
   sleep 0.1
+}
+
+# ctrl_click_type STATS WIDGET TEXT: Ctrl+click on a recorded slider (ImGui turns it into a text
+# field), replace its text with TEXT and press Enter.
+ctrl_click_type() {
+  local x y
+  read -r x y < <("$CHECK" click-point "$1" "$2") || fail "control $2 not found in $1"
+  xdotool mousemove "$x" "$y"
+  sleep 0.15
+  xdotool keydown ctrl
+  sleep 0.1
+  xdotool click 1
+  sleep 0.15
+  xdotool keyup ctrl
+  sleep 0.1
+  replace_text "$3"
+  xdotool keydown Return  # held for a moment, as in replace_text
+  sleep 0.15
+  xdotool keyup Return
 }
 
 # next_frame STATS [N]: waits N (default 10) frames past the current one.

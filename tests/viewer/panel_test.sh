@@ -12,11 +12,7 @@ enter_xvfb "$@"
 printf '{ "bodies": [ { "name": "b", "mesh": "x.obj", "alpha": 3 } ] }\n' >"$WORK/bad_scene.json"
 live=$WORK/live.json
 cd "$WORK"  # the viewer's current folder: where Save proposes to put an edited shipped scene
-"$SOFTBODY" ${SCENE_ARGS[@]+"${SCENE_ARGS[@]}"} --frames 100000 --stats "$live" --stats-every 3 \
-  >"$WORK/viewer.log" 2>&1 &
-VIEWER_PID=$!
-trap '[ -n "${VIEWER_PID:-}" ] && kill "$VIEWER_PID" 2>/dev/null || true' EXIT
-wait_for_frame "$live" 10
+start_live_viewer "$live"
 
 # positions STATS: the four sliders' rectangles, one line.
 positions() {
@@ -64,19 +60,7 @@ t1=$("$CHECK" get "$live" /simTime)
 awk -v a="$t0" -v b="$t1" 'BEGIN { exit !(b > a) }' || fail "typing r into a text field reset ($t0 -> $t1 s)"
 
 # Ctrl+click on alpha turns the slider into a text field: type a value.
-read -r x y < <("$CHECK" click-point "$live" alpha)
-xdotool mousemove "$x" "$y"
-sleep 0.15
-xdotool keydown ctrl
-sleep 0.1
-xdotool click 1
-sleep 0.15
-xdotool keyup ctrl
-sleep 0.1
-replace_text "0.05"
-xdotool keydown Return  # held for a moment: ImGui 1.86 polls key state once per frame
-sleep 0.15
-xdotool keyup Return
+ctrl_click_type "$live" alpha 0.05
 next_frames "$live" 5
 alpha=$("$CHECK" get "$live" /bodies/0/params/alpha)
 echo "alpha after Ctrl+click and typing 0.05: $alpha"
@@ -131,19 +115,7 @@ next_frames "$live" 5
 # keeps running; Cancel closes it; Esc opens it again; "Quit without saving" ends the program
 # (exit 0) and leaves the saved file as it was.
 [ "$("$CHECK" get "$live" /quitDialog)" = false ] || fail "the quit dialog is open already"
-read -r x y < <("$CHECK" click-point "$live" alpha)
-xdotool mousemove "$x" "$y"
-sleep 0.15
-xdotool keydown ctrl
-sleep 0.1
-xdotool click 1
-sleep 0.15
-xdotool keyup ctrl
-sleep 0.1
-replace_text "0.3"
-xdotool keydown Return
-sleep 0.15
-xdotool keyup Return
+ctrl_click_type "$live" alpha 0.3
 next_frames "$live" 5
 in_view
 xdotool key q

@@ -11,11 +11,7 @@ enter_xvfb "$@"
 printf '{ "bodies": [ { "name": "b", "mesh": "x.obj", "alpha": 3 } ] }\n' >"$WORK/bad_scene.json"
 live=$WORK/live.json
 
-"$SOFTBODY" ${SCENE_ARGS[@]+"${SCENE_ARGS[@]}"} --frames 100000 --stats "$live" --stats-every 3 \
-  >"$WORK/viewer.log" 2>&1 &
-VIEWER_PID=$!
-trap '[ -n "${VIEWER_PID:-}" ] && kill "$VIEWER_PID" 2>/dev/null || true' EXIT
-wait_for_frame "$live" 10
+start_live_viewer "$live"
 scene=$("$CHECK" get "$live" /scenePath)
 
 click_widget "$live" sceneHeader
