@@ -175,7 +175,8 @@ bool ViewerApp::writeStats(const std::string& path) const {
     // centre, then the projected particles nearest the eye first (each a quarter of the way
     // towards the centre, off the silhouette), at most kGrabCandidates pixels, so a body hidden
     // behind others costs a bounded search. Large scene (54 bodies), 1280x720: 3.7 s per write
-    // with the ring search and every body ray-cast per pixel, 28 ms now (4 bodies get null).
+    // (machine under load) with the ring search and every body ray-cast per pixel, 15 ms now
+    // (idle machine; 4 bodies get null).
     constexpr std::size_t kGrabCandidates = 48;
     std::vector<std::pair<float, glm::vec2>> candidates;  // (distance from the eye, pixel)
     candidates.push_back({0.0f, centrePixel});
