@@ -4,9 +4,13 @@
 // duplicated or removed. Bodies are added through the scene library (addSceneBody), so they are
 // checked like bodies of a scene file and saved like them.
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -97,6 +101,7 @@ bool ViewerApp::addBodyFromMesh(const std::string& path) {
 
 void ViewerApp::removeBody(int body) {
   const std::string name = scene_.world.name(scene_.bodies[static_cast<std::size_t>(body)].handle);
+  endDrag();  // before the body goes: the drag may hold it
   removeSceneBody(scene_, body);
   bodiesChanged();
   statusMessage_ = "removed " + name;
