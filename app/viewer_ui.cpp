@@ -314,18 +314,21 @@ void ViewerApp::drawBodyPanel(int body) {
     };
     changed |=
         sliderDouble("alpha", &p.alpha, 0.0f, 1.0f, "%.3f",
-                     "Stiffness, [0, 1]: share of the way to the goal per sub-step (1 = onto the\n"
-                     "goal: rigid in rigid mode). The same at any number of clusters.");
+                     "Stiffness, [0, 1]: share of the way to the goal per 1/240 s (1 = onto the\n"
+                     "goal: rigid in rigid mode). The same material at any number of clusters\n"
+                     "and any time step or sub-step count.");
     record("alpha");
     changed |= sliderDouble(
         "beta", &p.beta, 0.0f, 1.0f, "%.3f",
         "Blend of the goal between rotation only (0) and the linear/quadratic fit (1),\n"
-        "applied as 0.9 x beta so every shape keeps a restoring force.");
+        "applied as 0.9 x beta so every shape keeps a restoring force (at 1/240 s;\n"
+        "converted for other sub-steps so the material stays the same).");
     record("beta");
     changed |=
         sliderDouble("damping", &p.damping, 0.0f, 1.0f, "%.3f",
-                     "Damping per sub-step of the velocity relative to the body's rigid motion\n"
-                     "(pinned bodies: the motion their pins allow, so a swing comes to rest).");
+                     "Damping, [0, 1]: share of the velocity relative to the body's rigid motion\n"
+                     "removed per 1/240 s, the same per second at any sub-step (pinned\n"
+                     "bodies: the motion their pins allow, so a swing comes to rest).");
     changed |= sliderDouble("restitution", &p.restitution, 0.0f, 1.0f, "%.2f",
                             "Share of the approach speed an impact gives back (0 = no bounce);\n"
                             "a contact uses the larger of its two sides'. Impacts faster than the\n"

@@ -146,7 +146,10 @@ struct BodySlot {
   std::uint32_t generation = 0;
   bool alive = false;
   std::shared_ptr<const BodyModel> model;
-  BodyParams params;
+  BodyParams params;  // as set (World::params)
+  // What the phases apply: params with α, β and damping converted to the sub-step the step runs
+  // (substep_material.h). Set by World::step before its sub-steps.
+  BodyParams stepParams;
   BodyState state;
   SleepState sleep;
 };

@@ -53,16 +53,21 @@ struct PlasticityParams {
 struct BodyParams {
   Mode mode = Mode::Linear;
   // α in [0, 1]: the fraction of the way from the predicted positions x̂ = x + h·v + h²·g to the
-  // goals per sub-step h; 1 = onto the goal (rigid mode: rigid at any time step). As a
-  // stiffness per unit mass, k = α / ((1 − α)·h²) (1/s²). The same α drives the whole-body
-  // level of clustered bodies, so the stiffness does not depend on the clusters.
+  // goals per reference sub-step h_ref = 1/240 s; 1 = onto the goal (rigid mode: rigid at any
+  // time step). As a stiffness per unit mass, k = α / ((1 − α)·h_ref²) (1/s²), kept at every
+  // other sub-step (substep_material.h), so the material does not depend on the time step or
+  // the sub-step count. The same α drives the whole-body level of clustered bodies, so the
+  // stiffness does not depend on the clusters either.
   double alpha = 0.5;
   // β in [0, 1]: blend of the goal from the best rotation (0) toward the linear/quadratic fit,
   // applied as 0.9·β (shape_matching.h): even β = 1 keeps a restoring force on every shape.
+  // Stated at h_ref; converted for other sub-steps so that what the fit follows keeps its
+  // stiffness too (substep_material.h).
   double beta = 0.5;
   // Linear mode: divide A by ∛det(A) so the goal keeps the rest volume.
   bool preserveVolume = true;
-  // Damping in [0, 1] per sub-step of the velocity relative to the body's rigid motion (linear
+  // Damping in [0, 1] per reference sub-step (1/240 s; the same decay per second at any
+  // sub-step, substep_material.h) of the velocity relative to the body's rigid motion (linear
   // and angular velocity with the body's momenta, pinned particles immovable: a pinned body's
   // rigid motion is only what its pins allow, so its swing is damped); free rigid motion is
   // never damped.

@@ -68,7 +68,7 @@ void prepareBody(BodySlot& b, SolverBody& sb) {
   // A stiff body answers a contact mostly as a whole (contact_solver.h): shape matching couples
   // a particle to its body by α per sub-step. One held by pinned particles cannot move as a
   // whole.
-  sb.rigidShare = m.pinned.empty() ? float(b.params.alpha) : 0.0f;
+  sb.rigidShare = m.pinned.empty() ? float(b.stepParams.alpha) : 0.0f;
   sb.recoveryShare = m.pinned.empty() ? 1.0f : 0.0f;
   sb.immovable = b.sleep.asleep;
   prepareSolverBody(sb);
@@ -77,7 +77,7 @@ void prepareBody(BodySlot& b, SolverBody& sb) {
 // A body whose impacts are events of the pair as a whole (soft_impact.h): soft (α < 1) and free
 // to move as a whole (no pinned particles).
 bool impactsAsAWhole(const BodySlot& b) {
-  return b.params.alpha < 1.0 && b.model->pinned.empty();
+  return b.stepParams.alpha < 1.0 && b.model->pinned.empty();
 }
 
 bool lessImpactKey(const ContactScratch::SoftPair& a, const ContactScratch::SoftPair& b) {
@@ -212,7 +212,7 @@ void runSoftImpacts(ContactScratch& scratch, std::vector<SolverBody>& bodies,
       impact.restitution = p.restitution;
       double alpha = 1.0;
       for (int slot : p.key)
-        if (slot >= 0) alpha = std::min(alpha, slots[size_t(slot)].params.alpha);
+        if (slot >= 0) alpha = std::min(alpha, slots[size_t(slot)].stepParams.alpha);
       impact.relaxing = relaxSubsteps(alpha);
     }
     Vec3f va, vb;
@@ -597,7 +597,7 @@ int runSolvePhase(const WorkLayout& layout, const ContactSettings& settings, dou
     const BodySlot& probe = slots[size_t(pair.probe)];
     const BodySlot& obstacle = slots[size_t(pair.obstacle)];
     const float gap = kContactGap * obstacle.model->spacing;
-    const float e = float(std::max(probe.params.restitution, obstacle.params.restitution));
+    const float e = float(std::max(probe.stepParams.restitution, obstacle.stepParams.restitution));
     // A pair with a soft body bounces as a whole (soft_impact.h); its contacts are inelastic.
     const bool soft = impactsAsAWhole(probe) || impactsAsAWhole(obstacle);
     const std::array<int, 2> key{std::min(pair.probe, pair.obstacle),
@@ -628,7 +628,8 @@ int runSolvePhase(const WorkLayout& layout, const ContactSettings& settings, dou
       cp.normal = hit.normal;
       cp.distance0 = hit.distance;
       cp.friction = float(collider.friction);
-      const float e = float(std::max(collider.restitution, slots[size_t(s)].params.restitution));
+      const float e =
+          float(std::max(collider.restitution, slots[size_t(s)].stepParams.restitution));
       const bool soft = impactsAsAWhole(slots[size_t(s)]);
       cp.restitution = soft ? 0.0f : e;
       points.push_back(cp);

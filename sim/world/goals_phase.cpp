@@ -25,7 +25,7 @@ GoalsTimes runGoalsPhase(const WorkLayout& layout, double h, std::vector<BodySlo
   scratch.partial.resize(tasks.size());
   auto taskMoments = [&](int i) {
     const BodySlot& b = slots[size_t(tasks[size_t(i)].slot)];
-    return b.state.clusters.taskMoments(*b.model, b.params.mode == Mode::Quadratic, b.state.x,
+    return b.state.clusters.taskMoments(*b.model, b.stepParams.mode == Mode::Quadratic, b.state.x,
                                         tasks[size_t(i)].task);
   };
   // Large clusters are split into tasks summed first, in parallel; a cluster with one task is
@@ -61,7 +61,7 @@ GoalsTimes runGoalsPhase(const WorkLayout& layout, double h, std::vector<BodySlo
                     sum += scratch.partial[size_t(gc.firstTask + t)];
                 }
                 scratch.clusterBad[size_t(i)] = b.state.clusters.updateCluster(
-                    m, b.params, gc.cluster, sum, h, &scratch.plasticSeconds[size_t(i)]);
+                    m, b.stepParams, gc.cluster, sum, h, &scratch.plasticSeconds[size_t(i)]);
               });
   // Batches of small clusters. Static split: a thread handles the same batches every sub-step,
   // so the clusters' state and goals stay in its cache (with a dynamic split they moved between
@@ -72,7 +72,7 @@ GoalsTimes runGoalsPhase(const WorkLayout& layout, double h, std::vector<BodySlo
     const GlobalBatch& gb = batches[size_t(i)];
     BodySlot& b = slots[size_t(gb.slot)];
     scratch.batchBad[size_t(i)] =
-        b.state.clusters.updateBatch(*b.model, b.params, gb.batch, b.state.x, h);
+        b.state.clusters.updateBatch(*b.model, b.stepParams, gb.batch, b.state.x, h);
   });
   for (size_t i = 0; i < batches.size(); ++i)
     if (scratch.batchBad[i]) bad[size_t(batches[i].slot)] = 1;

@@ -330,14 +330,15 @@ void runProjectPhase(const WorkLayout& layout, const Vec3& gravity, double h,
   parallelFor(static_cast<int>(groupBlocks.size()), minParallel, [&](int i) {
     const ParticleBlock& blk = groupBlocks[size_t(i)];
     BodySlot& b = slots[size_t(blk.slot)];
-    b.state.clusters.sumGroupGoals(*b.model, b.params.mode == Mode::Quadratic, blk.begin, blk.end);
+    b.state.clusters.sumGroupGoals(*b.model, b.stepParams.mode == Mode::Quadratic, blk.begin,
+                                   blk.end);
   });
   // The sums are taken about the first particle, as rigidMotion takes them: where this sweep will
   // put it, projected ahead on a copy (the same kernel, the same bits).
   for (int s : order) {
     BodySlot& b = slots[size_t(s)];
     if (motionFromProjection(*b.model))
-      startRigidMotionSums(b.state.motion, projectedFirst(*b.model, b.state, b.params).data(),
+      startRigidMotionSums(b.state.motion, projectedFirst(*b.model, b.state, b.stepParams).data(),
                            b.model->particleCount());
   }
   parallelFor(static_cast<int>(blocks.size()), minParallel, [&](int i) {
@@ -346,7 +347,7 @@ void runProjectPhase(const WorkLayout& layout, const Vec3& gravity, double h,
     const BodyModel& m = *b.model;
     BodyState& st = b.state;
     const ProjectedVelocities velocities = projectedVelocities(st, invH, fallSpeed);
-    blockBad[size_t(i)] = projectBlock(m, st, b.params, blk.begin, blk.end, velocities);
+    blockBad[size_t(i)] = projectBlock(m, st, b.stepParams, blk.begin, blk.end, velocities);
     if (motionFromProjection(m))
       sumRigidMotionBlocks(columnsOf(st.x), columnsOf(st.v), m.mass.data(), blk.begin, blk.end,
                            st.motion);
@@ -366,7 +367,7 @@ void runWholeBodyPhase(const WorkLayout& layout, std::vector<BodySlot>& slots,
                 const int s = order[size_t(k)];
                 BodySlot& b = slots[size_t(s)];
                 if (!b.model->wholeBodyLevel) return;
-                if (b.state.clusters.projectWholeBody(*b.model, b.params, b.state.x))
+                if (b.state.clusters.projectWholeBody(*b.model, b.stepParams, b.state.x))
                   bad[size_t(s)] = 1;
                 for (int p : b.model->pinned) b.state.x.row(p) = b.model->startPositions.row(p);
               });
@@ -435,7 +436,7 @@ void runDampingPhase(const WorkLayout& layout, std::vector<BodySlot>& slots,
   parallelFor(static_cast<int>(order.size()),
               layout.particles >= kMinParallelBodyWork ? 2 : INT32_MAX, [&](int k) {
                 BodySlot& b = slots[size_t(order[size_t(k)])];
-                const double kd = b.params.damping;
+                const double kd = b.stepParams.damping;
                 if (!(kd > 0.0)) return;
                 const BodyModel& m = *b.model;
                 MatX3f& x = b.state.x;

@@ -15,6 +15,7 @@
 #include "sim/world/mass_properties.h"
 #include "sim/world/param_ranges.h"
 #include "sim/world/sleep_phase.h"
+#include "sim/world/substep_material.h"
 #include "sim/world/work_layout.h"
 
 namespace sb {
@@ -113,7 +114,7 @@ void World::Data::substep(double h, StepProfile& prof) {
   // Each body's clusters on the path its parameters call for; work lists for those paths.
   for (int s : awake) {
     BodySlot& b = slots[size_t(s)];
-    if (b.state.clusters.selectPath(*b.model, b.params)) layoutDirty = true;
+    if (b.state.clusters.selectPath(*b.model, b.stepParams)) layoutDirty = true;
   }
   if (layoutDirty) {
     layout = buildWorkLayout(slots, awake);
@@ -519,6 +520,10 @@ void World::step() {
 void World::step(double dt) {
   requireRange("step: dt", limits::timeStep, dt);
   const int n = substepsFor(dt);
+  for (int s : d_->order) {
+    BodySlot& b = d_->slots[size_t(s)];
+    b.stepParams = paramsForSubstep(b.params, dt / n);
+  }
   StepProfile prof;
   for (int i = 0; i < n; ++i) d_->substep(dt / n, prof);
   d_->forces.clear();

@@ -17,7 +17,9 @@
 //   Check       bodies with NaN/Inf are reset to their start and reported as events
 //   Sleep       bodies at rest fall asleep, island by island                (sleep_phase.h)
 // The step is position-based and stable at any time step (for α ≤ 1 it maps a deformation to
-// at most √(1 − α) of itself per sub-step); rigid mode with α = 1 keeps the shape exactly.
+// at most √(1 − α) of itself per sub-step); rigid mode with α = 1 keeps the shape exactly. A
+// body's α, β and damping are stated for a 1/240 s sub-step and converted to the one the step
+// runs (substep_material.h): the material does not change with the time step.
 // Results depend only on the input and never on the thread count: every sum is formed in a
 // fixed order over fixed-size blocks. Accepted parameter ranges: param_ranges.h.
 #pragma once

@@ -51,7 +51,7 @@ struct Cantilever {
   int clusters = 0;
 };
 
-Cantilever runCantilever(double cell, double alpha, double seconds) {
+Cantilever runCantilever(double cell, double alpha, double seconds, int substeps = 2) {
   BodyDef def;
   def.positions = boxSurface(21, 5, 5, Vec3(2.0, 0.4, 0.4), Vec3(0, 1, 0));
   def.params.mode = Mode::Linear;
@@ -68,7 +68,7 @@ Cantilever runCantilever(double cell, double alpha, double seconds) {
     def.clusters.cellSize = cell;
     def.clusters.overlap = 0.5 * cell;
   }
-  World world;  // 1/60 s, one sub-step
+  World world(test::exactSubsteps(1.0 / 60, substeps));  // by default as World{}: 2 × 1/120 s
   const BodyHandle b = world.addBody(def);
   Cantilever out;
   out.clusters = world.clusterCount(b);
@@ -109,6 +109,24 @@ TEST(Material, CantileverSagDoesNotDependOnTheNumberOfClusters) {
   EXPECT_LE(hi - mid, 0.15 * mid);  // every run within ±15 % of the others' middle
 }
 
+TEST(Material, CantileverSagDoesNotDependOnTheSubstep) {
+  // α, β and damping are stated for the reference sub-step and converted (substep_material.h):
+  // the same bar sags the same at 2 to 16 sub-steps per 1/60 s frame. Applied as given, α made
+  // it 4× stiffer per halving of the sub-step (0.1: 11.1 → 0.17 mm from 2 to 16 sub-steps).
+  for (double alpha : {0.1, 0.5}) {
+    double lo = 1e9, hi = 0;
+    for (int substeps : {2, 4, 8, 16}) {
+      const Cantilever r = runCantilever(0.0, alpha, 3.0, substeps);
+      std::printf("[ material ] alpha %.1f, %2d sub-steps: sag %.3f mm\n", alpha, substeps,
+                  1e3 * r.sag);
+      lo = std::min(lo, r.sag);
+      hi = std::max(hi, r.sag);
+    }
+    EXPECT_GT(lo, 0.0);
+    EXPECT_LE(hi / lo, 1.3) << "alpha " << alpha;
+  }
+}
+
 TEST(Material, AlphaSetsTheStiffnessAtManyClusters) {
   // ~257 clusters (0.13 m cells): the soft bar sags at least five times as far as the stiff one.
   const Cantilever soft = runCantilever(0.13, 0.1, 4.0);
@@ -142,9 +160,9 @@ TEST(Material, PinnedParticlesHoldARigidBar) {
 }
 
 TEST(Material, PinnedSoftBarComesToRestHangingFromItsPins) {
-  // A soft bar (one cluster, α 0.05, damping 0.1) sags visibly and, though its swing is a
+  // A soft bar (one cluster, α 0.013, damping 0.1) sags visibly and, though its swing is a
   // rigid motion about the pins, comes to rest: damping keeps only what the pins allow.
-  const Cantilever soft = runCantilever(0.0, 0.05, 8.0);
+  const Cantilever soft = runCantilever(0.0, 0.013, 8.0);
   std::printf("[ material ] soft cantilever: sag %.1f mm, at rest from %.2f s\n", 1e3 * soft.sag,
               soft.restTime);
   EXPECT_GT(soft.sag, 0.02);

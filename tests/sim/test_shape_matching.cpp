@@ -9,6 +9,7 @@
 #include "sim/world/matching/cluster_rest.h"
 #include "sim/world/matching/goal_projection.h"
 #include "sim/world/matching/shape_matching.h"
+#include "sim/world/substep_material.h"
 #include "test_util.h"
 #include "tests/draws.h"
 
@@ -19,9 +20,10 @@ using test::jitteredGrid;
 using test::noGravity;
 using test::toMatrix;
 
-// Goals of the body for positions x (the Goals phase of one step, read back).
+// Goals of the body for positions x (the Goals phase of one step, read back), at the reference
+// sub-step, where β applies as given (substep_material.h).
 Eigen::MatrixX3d goalsFor(const BodyDef& def, const Eigen::MatrixX3d& x) {
-  World world(noGravity(0.01));
+  World world(noGravity(kReferenceSubstep));
   const BodyHandle b = world.addBody(def);
   world.setState(b, x, Eigen::MatrixX3d::Zero(x.rows(), 3));
   world.step();
