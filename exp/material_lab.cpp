@@ -1,0 +1,61 @@
+// Material lab (experiment, not a test): the cantilever of tests/sim/test_material.cpp at one
+// α, cluster cell size and frame time, with 1 to 16 sub-steps per frame, 6 s simulated, sleep off.
+// Usage: material_lab [ALPHA=0.5] [CELL=0: one cluster] [DT=1/60]. Prints the tip sag per run.
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "sim/world/world.h"
+
+using namespace sb;
+
+static std::vector<Vec3> boxSurface(int nx, int ny, int nz, const Vec3& size, const Vec3& origin) {
+  std::vector<Vec3> p;
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i)
+        if (i == 0 || j == 0 || k == 0 || i == nx - 1 || j == ny - 1 || k == nz - 1)
+          p.push_back(origin + Vec3(size.x() * i / (nx - 1), size.y() * j / (ny - 1),
+                                    size.z() * k / (nz - 1)));
+  return p;
+}
+
+int main(int argc, char** argv) {
+  const double alpha = argc > 1 ? std::atof(argv[1]) : 0.5;
+  const double cell = argc > 2 ? std::atof(argv[2]) : 0.0;
+  const double dt = argc > 3 ? std::atof(argv[3]) : 1.0 / 60;
+  for (int sub : {1, 2, 4, 8, 16}) {
+    BodyDef def;
+    def.positions = boxSurface(21, 5, 5, Vec3(2.0, 0.4, 0.4), Vec3(0, 1, 0));
+    def.params.mode = Mode::Linear;
+    def.params.alpha = alpha;
+    def.params.beta = 0.3;
+    def.params.damping = 0.3;
+    std::vector<int> tip;
+    for (int i = 0; i < int(def.positions.size()); ++i) {
+      if (def.positions[size_t(i)].x() < 1e-9) def.pinned.push_back(i);
+      if (def.positions[size_t(i)].x() > 2.0 - 1e-9) tip.push_back(i);
+    }
+    if (cell > 0) {
+      def.clusters.kind = ClusterDef::Kind::Grid;
+      def.clusters.cellSize = cell;
+      def.clusters.overlap = 0.5 * cell;
+    }
+    WorldSettings s;
+    s.timeStep = dt;
+    s.substeps = sub;
+    s.maxSubstep = 10;
+    s.sleep = false;
+    World world(s);
+    const BodyHandle b = world.addBody(def);
+    for (int k = 0; k < int(6.0 / dt); ++k) world.step();
+    const auto x = world.positions(b);
+    double sag = 0;
+    for (int i : tip) sag += def.positions[size_t(i)].y() - x(i, 1);
+    sag /= double(tip.size());
+    std::printf("alpha %.3f cell %.2f dt %.4f substeps %2d (h %.5f): sag %.2f mm\n", alpha, cell,
+                dt, sub, dt / sub, 1e3 * sag);
+  }
+}
