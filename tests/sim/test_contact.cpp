@@ -885,31 +885,34 @@ LargeStepLanding landAtLargeSteps(Mode mode, double alpha, double h, bool exact 
   return r;
 }
 
-// Soft bodies landing at one-second sub-steps (the CLI accepts steps up to 10 s): the whole fall
-// of a step ends in the floor, every particle is in contact, and the solve moves particles by
-// metres. The fitted rigid motion used to follow the particles' moving positions instead of the
-// lever arms the solve is linear about: friction then turned the body by 2 rad per sub-step and
-// the kinetic energy grew ×10⁴ within five steps (the default scene's soft bodies at dt 1 s).
-// Such a body is squashed under its own weight (k = α/((1 − α)h²) is a very soft material at
-// h = 1 s) but gains no energy, keeps within a few times its size and rests on the floor.
-// (At α 0.9 the same drop still gains energy from h ≈ 0.5 s per sub-step on: friction's
-// linearised solve; the default maxSubstep keeps sub-steps far below that, next test.)
-TEST(Contact, SoftBodiesLandWithoutGainingEnergyAtOneSecondSubSteps) {
+// Soft bodies landing at long sub-steps (the CLI accepts steps up to 10 s): the whole fall of a
+// step ends in the floor, every particle is in contact, and the solve moves particles by metres.
+// The fitted rigid motion used to follow the particles' moving positions instead of the lever
+// arms the solve is linear about: friction then turned the body by 2 rad per sub-step and the
+// kinetic energy grew ×10⁴ within five steps (the default scene's soft bodies at dt 1 s). With α
+// applied per sub-step as given, a long sub-step also made the material very soft
+// (k = α/((1 − α)h²)): at α 0.9 the same drop gained 3.5·10⁴ J at 1 s and 5·10³⁵ J at 3 s, at
+// α 0.5 7.5·10¹² J at 3 s. Stated per 1/240 s and converted (substep_material.h), the material
+// is the same at any sub-step: no energy gained, and the body keeps its size (at most ×1.21
+// measured at 3 s; soft bodies at 10 s still spread to ×2.7, which this test does not cover).
+TEST(Contact, SoftBodiesLandWithoutGainingEnergyAtLongSubSteps) {
   for (const Mode mode : {Mode::Rigid, Mode::Linear, Mode::Quadratic})
-    for (const double alpha : {0.3, 0.5}) {
-      const LargeStepLanding r = landAtLargeSteps(mode, alpha, 1.0);
-      const std::string label = std::string(modeName(mode)) + " α " + std::to_string(alpha);
-      EXPECT_LT(r.energyExcess, 1e-3 * r.released) << label;
-      EXPECT_LT(r.largestRadius, 3.0 * r.restRadius) << label;
-      EXPECT_GT(r.lowest, -0.1 * r.restRadius) << label;
-      EXPECT_LT(r.height, r.restRadius) << label;
-    }
+    for (const double alpha : {0.3, 0.5, 0.9})
+      for (const double h : {0.5, 1.0, 3.0}) {
+        const LargeStepLanding r = landAtLargeSteps(mode, alpha, h);
+        const std::string label =
+            std::string(modeName(mode)) + " α " + std::to_string(alpha) + " h " + std::to_string(h);
+        EXPECT_LT(r.energyExcess, 1e-3 * r.released) << label;
+        EXPECT_LT(r.largestRadius, 1.3 * r.restRadius) << label;
+        EXPECT_GT(r.lowest, -0.1 * r.restRadius) << label;
+        EXPECT_LT(r.height, r.restRadius) << label;
+      }
 }
 
 // With the default settings a long step runs sub-steps of at most 1/120 s, so a soft body lands
 // as it does at short steps whatever the step: no energy gained, its shape kept within its
-// material's squash. α 0.9 is the case that gains energy at one sub-step of 0.5 s (and reaches
-// 5·10³⁵ J at 3 s); dt 3 s is 360 sub-steps per step.
+// material's squash. α 0.9 is the case that gained energy at one sub-step of 0.5 s before the
+// sub-step conversion (previous test); dt 3 s is 360 sub-steps per step.
 TEST(Contact, SoftBodiesLandAsAtShortStepsWhenLongStepsAreSplit) {
   for (const Mode mode : {Mode::Linear, Mode::Quadratic})
     for (const double h : {0.5, 3.0}) {
