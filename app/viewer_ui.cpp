@@ -231,8 +231,8 @@ void ViewerApp::drawWorldPanel() {
   double maxSubstepMs = s.maxSubstep * 1000.0;
   if (sliderDouble("max sub-step (ms)", &maxSubstepMs, 1.0f, 1000.0f, "%.2f",
                    "Longest sub-step: a time step longer than substeps x this runs more\n"
-                   "sub-steps. Contacts need short sub-steps (default 8.33 ms); a body on\n"
-                   "its own keeps its shape at any sub-step.",
+                   "sub-steps. Contacts need short sub-steps (default 8.33 ms); the\n"
+                   "material is the same at any sub-step. Range 1 ms to 1 s.",
                    ImGuiSliderFlags_Logarithmic)) {
     s.maxSubstep = maxSubstepMs / 1000.0;
     changed = true;

@@ -23,12 +23,14 @@ std::string formatNumber(double v);
 
 namespace limits {
 // World settings.
-inline constexpr ParamRange timeStep{1e-7, 10.0};    // s, per step() (and per dt of step(dt))
-inline constexpr ParamRange substeps{1, 1000};       // sub-steps per step()
-inline constexpr ParamRange maxSubstep{1e-4, 10.0};  // s, longest sub-step before splitting
-inline constexpr ParamRange gravityNorm{0.0, 1e4};   // m/s², length of the gravity vector
-inline constexpr ParamRange friction{0.0, 1000.0};   // μ, colliders and body–body contact
-inline constexpr ParamRange restitution{0.0, 1.0};   // e, colliders and bodies
+inline constexpr ParamRange timeStep{1e-7, 10.0};  // s, per step() (and per dt of step(dt))
+inline constexpr ParamRange substeps{1, 1000};     // sub-steps per step()
+// s, longest sub-step before splitting. At most 1 s: longer sub-steps let a pile pass through
+// itself in one sub-step (gravity predicts g·h² = 98 m at 10 s) and blow up (world.h).
+inline constexpr ParamRange maxSubstep{1e-4, 1.0};
+inline constexpr ParamRange gravityNorm{0.0, 1e4};  // m/s², length of the gravity vector
+inline constexpr ParamRange friction{0.0, 1000.0};  // μ, colliders and body–body contact
+inline constexpr ParamRange restitution{0.0, 1.0};  // e, colliders and bodies
 inline constexpr ParamRange restitutionThreshold{0.0, 1e4};  // m/s
 inline constexpr ParamRange rollingResistance{0.0, 1.0};     // dimensionless (lever / ρ)
 // Body parameters.

@@ -24,8 +24,8 @@ double alphaForSubstep(double alpha, double h) {
 double betaForSubstep(double beta, double alpha, double h) {
   if (alpha <= 0.0) return beta;
   const double applied = appliedBeta(beta);
-  const double follows = 1.0 - alphaForSubstep(alpha * (1.0 - applied), h) /
-                                   alphaForSubstep(alpha, h);
+  const double follows =
+      1.0 - alphaForSubstep(alpha * (1.0 - applied), h) / alphaForSubstep(alpha, h);
   return follows / kBetaMax;
 }
 

@@ -40,15 +40,15 @@ struct WorldSettings {
   Vec3 gravity = Vec3(0.0, -9.81, 0.0);  // m/s²
   double timeStep = 1.0 / 60.0;          // seconds advanced by step(), [1e-7, 10]
   int substeps = 1;                      // sub-steps per step(), 1 … 1000
-  // Longest sub-step, seconds, [1e-4, 10]: a step whose dt / substeps exceeds it runs
+  // Longest sub-step, seconds, [1e-4, 1]: a step whose dt / substeps exceeds it runs
   // ceil(dt / maxSubstep) equal sub-steps instead (World::substepsFor). Contacts are found
   // after each sub-step's prediction and solved linearised, which needs bodies to move less
-  // than about a particle spacing per sub-step: at 10 s per sub-step gravity alone predicts
-  // g·h² = 981 m, and the shipped pile's bodies pass through each other in the first sub-step
-  // and blow up (at 1 s it comes to rest, 1 % growth; docs/design.md §3). The shape-matching
-  // update itself is stable at any sub-step, and the material is the same at any sub-step
-  // (substep_material.h), so 10 (never split) is safe for a body on its own, and for bodies
-  // resting on colliders (the default scene at 10 s: 1.3 % growth). The default, 1/120 s, is half
+  // than about a particle spacing per sub-step. The material is the same at any sub-step
+  // (substep_material.h), and at 1-s sub-steps every shipped scene keeps its energy and its
+  // bodies' shapes (within 26 % of their diagonal; resting particles up to 3 spacings inside a
+  // collider). Longer sub-steps are refused: at 2 s the large scene's bodies grow ×8, at 10 s
+  // (g·h² = 981 m) the pile's bodies pass through each other in the first sub-step and blow
+  // up (docs/design.md §3). The default, 1/120 s, is half
   // Jolt's rule of thumb (one collision step per 1/60 s): at 1/60 s the shipped pile rests with
   // particles 1.15 spacings inside other bodies and restitution.json's e = 0.9 box never stops
   // bouncing; at 1/120 s neither happens.

@@ -893,12 +893,13 @@ LargeStepLanding landAtLargeSteps(Mode mode, double alpha, double h, bool exact 
 // applied per sub-step as given, a long sub-step also made the material very soft
 // (k = α/((1 − α)h²)): at α 0.9 the same drop gained 3.5·10⁴ J at 1 s and 5·10³⁵ J at 3 s, at
 // α 0.5 7.5·10¹² J at 3 s. Stated per 1/240 s and converted (substep_material.h), the material
-// is the same at any sub-step: no energy gained, and the body keeps its size (at most ×1.21
-// measured at 3 s; soft bodies at 10 s still spread to ×2.7, which this test does not cover).
+// is the same at any sub-step: no energy gained, and the body keeps its size (1-s sub-steps
+// are the longest accepted; at 3-s sub-steps, refused since, it grew at most ×1.21, at 10 s
+// ×2.7).
 TEST(Contact, SoftBodiesLandWithoutGainingEnergyAtLongSubSteps) {
   for (const Mode mode : {Mode::Rigid, Mode::Linear, Mode::Quadratic})
     for (const double alpha : {0.3, 0.5, 0.9})
-      for (const double h : {0.5, 1.0, 3.0}) {
+      for (const double h : {0.25, 0.5, 1.0}) {
         const LargeStepLanding r = landAtLargeSteps(mode, alpha, h);
         const std::string label =
             std::string(modeName(mode)) + " α " + std::to_string(alpha) + " h " + std::to_string(h);

@@ -89,7 +89,7 @@ TEST(Scene, ErrorsNameFileFieldAndReason) {
   expectSceneError(R"({"world": {"rollingResistance": 2}, "bodies": []})",
                    "world.rollingResistance: must be in [0, 1], got 2");
   expectSceneError(R"({"world": {"maxSubstep": 0}, "bodies": []})",
-                   "world.maxSubstep: must be in [0.0001, 10], got 0");
+                   "world.maxSubstep: must be in [0.0001, 1], got 0");
   expectSceneError(R"({"bodies": [{"mesh": "/no/such/mesh.obj"}]})",
                    "bodies[0].mesh: /no/such/mesh.obj");
   // A render mesh needs a valid closed cage; a mesh with no faces cannot be one.

@@ -175,6 +175,74 @@ std::string testName(const ::testing::TestParamInfo<std::string>& info) {
 
 INSTANTIATE_TEST_SUITE_P(Shipped, ShippedScene, ::testing::ValuesIn(shippedSceneNames()), testName);
 
+// Every shipped scene run at one sub-step of 1 s per step (maxSubstep 1 s, the longest
+// accepted): nothing gains energy and no body leaves its shape. Kinetic energy never exceeds
+// what the scene had at the start plus the potential energy of every particle falling 1 m below
+// the lowest start point (no collider is lower); every body keeps within 30 % of its diagonal of
+// its best rigid fit (measured at most 26 %, a soft pile body under the others) and no particle
+// ends deeper than 5 spacings in a collider (measured at most 3.05, the pile: at such sub-steps
+// the floor's contacts resolve only approximately). Before the sub-step conversion
+// (substep_material.h) the pile, large and restitution scenes blew up at this step
+// (10¹³ – 10²⁹ J); the restitution scene also needed resting contact kept inelastic at long
+// sub-steps (contact_phase.cpp: approaches below 2|g|h). Sleep is off: bodies that fall asleep
+// and wake at 1-s sub-steps sink into the floor (restitution.json: 1.5 m in 20 s), a defect
+// found and not fixed (docs/design.md §3).
+class ShippedSceneAtOneSecondSubsteps : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(ShippedSceneAtOneSecondSubsteps, GainsNoEnergyAndKeepsItsBodies) {
+  Scene scene = loadScene(scenePath(GetParam()));
+  WorldSettings settings = scene.world.settings();
+  settings.timeStep = 1.0;
+  settings.substeps = 1;
+  settings.maxSubstep = 1.0;
+  settings.sleep = false;
+  scene.world.setSettings(settings);
+  ASSERT_EQ(scene.world.substepsFor(1.0), 1);
+  const double g = settings.gravity.norm();
+  const int n = int(scene.bodies.size());
+  double lowest = 1e30, budget = 0.0;
+  for (int i = 0; i < n; ++i) lowest = std::min(lowest, lowestY(scene, i));
+  auto kinetic = [&] {
+    double e = 0.0;
+    for (const SceneBody& b : scene.bodies) {
+      const Eigen::VectorXf m = scene.world.masses(b.handle);
+      const auto v = scene.world.velocities(b.handle);
+      for (int k = 0; k < m.size(); ++k) e += 0.5 * m[k] * v.row(k).squaredNorm();
+    }
+    return e;
+  };
+  budget = kinetic();
+  for (const SceneBody& b : scene.bodies) {
+    const Eigen::VectorXf m = scene.world.masses(b.handle);
+    const auto x = scene.world.positions(b.handle);
+    for (int k = 0; k < m.size(); ++k) budget += m[k] * g * (x(k, 1) - (lowest - 1.0));
+  }
+  double peak = 0.0;
+  for (int s = 0; s < 20; ++s) {
+    stepAndCheckFinite(scene, s);
+    if (HasFatalFailure()) return;
+    peak = std::max(peak, kinetic());
+    ASSERT_LE(kinetic(), budget) << "step " << s;
+  }
+  double worstShape = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double off =
+        test::maxDeviationFromRigidFit(scene, i) / test::boundingBoxDiagonal(scene, i);
+    EXPECT_LT(off, 0.3) << "body " << i;
+    worstShape = std::max(worstShape, off);
+  }
+  const test::ColliderClearance floor = test::lowestColliderClearance(scene);
+  EXPECT_GE(floor.relativeDistance, -5.0);
+  std::printf(
+      "[ scene    ] %s at 1-s sub-steps: peak kinetic energy %.3g J of %.3g J allowed; "
+      "largest departure from a rigid fit %.3g diagonals; lowest particle %.3g spacings "
+      "from a collider\n",
+      GetParam().c_str(), peak, budget, worstShape, floor.relativeDistance);
+}
+
+INSTANTIATE_TEST_SUITE_P(Shipped, ShippedSceneAtOneSecondSubsteps,
+                         ::testing::ValuesIn(shippedSceneNames()), testName);
+
 // Every shipped scene saved and loaded again is the same world: the same state, and the same
 // steps after it (settings, parameters, pins, initial velocities, colliders and clusters all
 // came back); saving the loaded copy gives the same bytes (a stable key order, numbers that

@@ -31,8 +31,7 @@ TEST(SubstepMaterial, AlphaKeepsTheStiffnessPerUnitMass) {
       const double a = alphaForSubstep(alpha, h);
       EXPECT_GT(a, 0.0);
       EXPECT_LT(a, 1.0);
-      EXPECT_NEAR(stiffness(a, h) / stiffness(alpha, kReferenceSubstep), 1.0,
-                  stiffnessTolerance(a))
+      EXPECT_NEAR(stiffness(a, h) / stiffness(alpha, kReferenceSubstep), 1.0, stiffnessTolerance(a))
           << "alpha " << alpha << " h " << h;
     }
   // Longer sub-steps need a larger share of the way for the same stiffness.

@@ -52,8 +52,8 @@ inline double kineticEnergy(const World& w, BodyHandle b) {
   return e;
 }
 
-// Settings whose sub-step is exactly dt / substeps, never split by maxSubstep: what tests of
-// the update itself at long sub-steps need.
+// Settings whose sub-step is exactly dt / substeps, split by maxSubstep only beyond 1 s (the
+// longest sub-step accepted): what tests of the update itself at long sub-steps need.
 inline WorldSettings exactSubsteps(double dt, int substeps = 1) {
   WorldSettings s;
   s.timeStep = dt;
