@@ -89,6 +89,7 @@ ViewerApp::ViewerApp(const ViewerOptions& options, Scene scene)
   scenePathInput_ = scene_.path;
   savePathInput_ = savePathFor(scene_.path);
   savedText_ = sceneText(scene_, scene_.path);
+  rememberFileParams();
   screenshotPathInput_ = "softbody_screenshot.png";
 }
 
@@ -471,6 +472,8 @@ bool ViewerApp::openScene(const std::string& path) {
     statusMessage_ = "opened " + path;
     savePathInput_ = savePathFor(path);
     savedText_ = sceneText(scene_, scene_.path);
+    rememberFileParams();
+    paramUndo_.clear();  // its handles were the old scene's
     if (window_) glfwSetWindowTitle(window_, ("softbody - " + path).c_str());
     return true;
   } catch (const std::exception& e) {
@@ -500,6 +503,7 @@ bool ViewerApp::saveCurrentScene(const std::string& path) {
     errorMessage_.clear();
     statusMessage_ = "saved " + path;
     savedText_ = sceneText(scene_, scene_.path);
+    rememberFileParams();
     return true;
   } catch (const std::exception& e) {
     errorMessage_ = std::string("cannot save scene: ") + e.what();

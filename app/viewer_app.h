@@ -115,6 +115,16 @@ class ViewerApp {
   void duplicateBody(int body);  // the body as saved, lifted above the highest body
   void bodiesChanged();          // rebuilds what the viewer keeps per body
 
+  // ---- viewer_params.cpp ----
+  // The parameters every body has now become "the file's" (the scene was opened or saved).
+  void rememberFileParams();
+  const BodyParams* fileParamsOf(BodyHandle body) const;  // null: the body is not in the file
+  // A panel control of `body` starts an edit: `before` is what Ctrl+Z brings back.
+  void rememberParamEdit(BodyHandle body, const BodyParams& before);
+  void setBodyParams(BodyHandle body, const BodyParams& params);  // errors to errorMessage_
+  void undoParamEdit();                                           // Ctrl+Z
+  void resetParamsToFile(BodyHandle body);                        // undoable
+
   // ---- viewer_input.cpp ----
   void installCallbacks();
   void onMouseButton(int button, int action, int mods);
@@ -206,6 +216,14 @@ class ViewerApp {
   bool overwriteShipped_ = false;                   // Save may rewrite a shipped scene
   // sceneText(scene_, scene_.path) when the scene was opened or last saved.
   std::string savedText_;
+  // Body parameters: the file's (when opened or last saved) and the undo history of panel
+  // edits, oldest first, at most kMaxParamUndo.
+  struct ParamEdit {
+    BodyHandle body;
+    BodyParams before;
+  };
+  static constexpr std::size_t kMaxParamUndo = 200;
+  std::vector<ParamEdit> fileParams_, paramUndo_;
   bool quitDialog_ = false;        // the "unsaved changes" dialog is open
   std::string screenshotRequest_;  // path of a screenshot to take after this frame is drawn
   // A --screenshot or --stats file could not be written: the program exits with code 1.

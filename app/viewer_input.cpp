@@ -159,6 +159,9 @@ void ViewerApp::onKey(int key, int action, int mods) {
     case GLFW_KEY_H:
       if (press) panelHidden_ = !panelHidden_;
       break;
+    case GLFW_KEY_Z:
+      if (press && (mods & GLFW_MOD_CONTROL)) undoParamEdit();
+      break;
     case GLFW_KEY_LEFT:
       camera_.orbit(-15.0f, 0.0f);
       break;

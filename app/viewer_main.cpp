@@ -50,7 +50,8 @@ int runViewerCommand(int argc, char** argv) {
       "Mouse: left drag pulls the surface point under the cursor; Ctrl + left drag pulls the\n"
       "nearest particle; right drag orbits; Shift + right drag or middle drag pans; wheel zooms.\n"
       "Keys: space pause, S/N single step, R reset, F frame the scene, H hide/show the panel,\n"
-      "P/C/K/G particles, cage, clusters, goals overlays, arrows orbit, +/- zoom, Esc/Q quit.\n"
+      "Ctrl+Z undo a parameter change, P/C/K/G particles, cage, clusters, goals overlays,\n"
+      "arrows orbit, +/- zoom, Esc/Q quit.\n"
       "Without a display the scene runs headless for --frames steps (300 by default).");
   cli.add_option("scene", options.scenePath, "scene file (JSON); default: the bundled scene");
   cli.add_option("--frames", options.frames, "exit after N frames (headless: steps, default 300)")

@@ -55,6 +55,7 @@ bool ViewerApp::writeStats(const std::string& path) const {
   j["savePath"] = savePathInput_;
   j["quitDialog"] = quitDialog_;
   j["bodyCount"] = scene_.bodies.size();
+  j["paramUndo"] = paramUndo_.size();
   json widgets = json::object();
   for (const auto& [name, r] : widgetRects_) widgets[name] = {r[0], r[1], r[2], r[3]};
   j["widgets"] = widgets;

@@ -150,7 +150,8 @@ void ViewerApp::drawPanel() {
         "Ctrl + left drag: pull the nearest particle.\n"
         "Right drag: orbit. Shift + right drag or middle drag: pan. Wheel: zoom.\n"
         "Space: pause. S/N: step. R: reset. F: frame the scene. H: hide/show this panel.\n"
-        "P/C/K/G: particles, cage, clusters, goals. Arrows: orbit. +/-: zoom. Esc/Q: quit.");
+        "Ctrl+Z: undo a parameter change. P/C/K/G: particles, cage, clusters, goals.\n"
+        "Arrows: orbit. +/-: zoom. Esc/Q: quit.");
   }
   ImGui::PopItemWidth();
   ImGui::End();
@@ -298,12 +299,15 @@ void ViewerApp::drawBodyPanel(int body) {
       ImGui::TreeNodeEx(world.name(h).c_str(), body == 0 ? ImGuiTreeNodeFlags_DefaultOpen : 0);
   tooltip("Parameters of this body (its colour in the view on the left).");
   if (open) {
-    BodyParams p = world.params(h);
+    const BodyParams before = world.params(h);
+    BodyParams p = before;
     bool changed = false;
+    bool editStarted = false;  // a control of this body was clicked or grabbed this frame
     int mode = static_cast<int>(p.mode);
     if (ImGui::Combo("mode", &mode, "rigid\0linear\0quadratic\0")) {
       p.mode = static_cast<Mode>(mode);
       changed = true;
+      editStarted = true;
     }
     tooltip(
         "Shape matching goal: rigid keeps the rest shape; linear allows shear and stretch; "
@@ -312,44 +316,59 @@ void ViewerApp::drawBodyPanel(int body) {
     auto record = [&](const char* name) {
       if (body == 0) recordWidget(name);
     };
+    // After every control: an edit that starts is remembered for Ctrl+Z, once per drag.
+    auto track = [&] { editStarted = editStarted || ImGui::IsItemActivated(); };
     changed |=
         sliderDouble("alpha", &p.alpha, 0.0f, 1.0f, "%.3f",
                      "Stiffness, [0, 1]: share of the way to the goal per 1/240 s (1 = onto the\n"
                      "goal: rigid in rigid mode). The same material at any number of clusters\n"
                      "and any time step or sub-step count.");
+    track();
     record("alpha");
     changed |= sliderDouble(
         "beta", &p.beta, 0.0f, 1.0f, "%.3f",
-        "Blend of the goal between rotation only (0) and the linear/quadratic fit (1),\n"
+        "Blend, [0, 1], of the goal between rotation only (0) and the linear/quadratic fit (1),\n"
         "applied as 0.9 x beta so every shape keeps a restoring force (at 1/240 s;\n"
         "converted for other sub-steps so the material stays the same).");
+    track();
     record("beta");
     changed |=
         sliderDouble("damping", &p.damping, 0.0f, 1.0f, "%.3f",
                      "Damping, [0, 1]: share of the velocity relative to the body's rigid motion\n"
                      "removed per 1/240 s, the same per second at any sub-step (pinned\n"
                      "bodies: the motion their pins allow, so a swing comes to rest).");
-    changed |= sliderDouble("restitution", &p.restitution, 0.0f, 1.0f, "%.2f",
-                            "Share of the approach speed an impact gives back (0 = no bounce);\n"
-                            "a contact uses the larger of its two sides'. Impacts faster than the\n"
-                            "threshold (1 m/s) rebound e^2 of the fall height, soft bodies too\n"
-                            "(their impact is one event of the two bodies as a whole).");
+    track();
+    changed |=
+        sliderDouble("restitution", &p.restitution, 0.0f, 1.0f, "%.2f",
+                     "Restitution, [0, 1]: share of the approach speed an impact gives back\n"
+                     "(0 = no bounce);\n"
+                     "a contact uses the larger of its two sides'. Impacts faster than the\n"
+                     "threshold (1 m/s) rebound e^2 of the fall height, soft bodies too\n"
+                     "(their impact is one event of the two bodies as a whole).");
+    track();
     changed |= sliderDouble("c_yield", &p.plasticity.yield, 0.0f, 1.0f, "%.3f",
-                            "Plastic yield: stretch ||S - I|| above which the rest shape creeps.");
+                            "Plastic yield, >= 0 (slider 0 to 1): stretch ||S - I|| above which\n"
+                            "the rest shape creeps.");
+    track();
     record("c_yield");
     changed |= sliderDouble("c_creep", &p.plasticity.creep, 0.0f, 20.0f, "%.2f",
-                            "Plastic creep rate in 1/s (0 = no plasticity): a sub-step absorbs\n"
+                            "Plastic creep rate in 1/s, >= 0 (slider 0 to 20; 0 = no plasticity):\n"
+                            "a sub-step absorbs\n"
                             "1 - exp(-h creep) of the stretch beyond the yield.");
+    track();
     record("c_creep");
     changed |= sliderDouble("c_max", &p.plasticity.max, 0.0f, 2.0f, "%.3f",
                             "Upper bound of the permanent deformation ||Sp - I||, [0, 2].");
-    if (changed) {
-      try {
-        world.setParams(h, p);
-      } catch (const std::exception& e) {
-        errorMessage_ = world.name(h) + ": " + e.what();
-      }
-    }
+    track();
+    if (editStarted) rememberParamEdit(h, before);
+    if (changed) setBodyParams(h, p);
+    const BodyParams* file = fileParamsOf(h);
+    if (ImGui::SmallButton("reset parameters") && file) resetParamsToFile(h);
+    if (body == 0) recordWidget("resetParams");
+    tooltip(file ? "Set this body's parameters back to the scene file's (as opened or last\n"
+                   "saved). Ctrl+Z undoes parameter changes one at a time."
+                 : "This body is not in the scene file (added here): nothing to reset to.\n"
+                   "Ctrl+Z undoes parameter changes one at a time.");
 
     // Clusters: rebuilt when a control is released (a rebuild clears plastic deformation).
     ClusterDef clusters = world.clusterDef(h);
