@@ -555,6 +555,7 @@ int runSolvePhase(const WorkLayout& layout, const ContactSettings& settings, dou
   const std::vector<ContactScratch::Pair>& contactPairs = scratch.pairs;
   scratch.touching.clear();
   scratch.activeContacts = 0;
+  scratch.deepestContact = 0;
   // The bodies of the solve: those with a contact, in creation order.
   std::vector<SolverBody>& bodies = scratch.solverBodies;
   std::vector<int>& solverIndex = scratch.solverIndex;
@@ -728,6 +729,7 @@ int runSolvePhase(const WorkLayout& layout, const ContactSettings& settings, dou
     }
     if (!(cp.lambda[0] > 0.0f || cp.lambda[1] > 0.0f)) continue;
     if (cp.obstacle >= 0) ++scratch.activeContacts;
+    scratch.deepestContact = std::max(scratch.deepestContact, -cp.distance0);
     ContactScratch::Warm w;
     w.key = keyOf(cp);
     for (int j = 0; j < 2; ++j) {

@@ -104,9 +104,12 @@ struct ContactScratch {
   std::vector<std::vector<int>> islandBodies, islandPoints;  // per island
   std::vector<Warm> warm, warmNext;                          // sorted by key
   // After the solve: slot pairs joined by a body–body contact this sub-step (for the sleep
-  // islands) and the number of body–body contacts that carried load.
+  // islands), the number of body–body contacts that carried load, and the deepest of all
+  // load-carrying contacts (body and collider) when they were detected, before the solve pushed
+  // them out (m, ≥ 0).
   std::vector<std::pair<int, int>> touching;
   int activeContacts = 0;
+  float deepestContact = 0;
 
   // Restitution of pairs that involve a soft body (soft_impact.h): the pairs touching this
   // sub-step, keyed as SoftImpact::key, and the impacts in progress (both sorted by key).

@@ -558,6 +558,9 @@ double World::time() const {
 int World::lastContactCount() const {
   return d_->contactCount;
 }
+double World::lastDeepestContact() const {
+  return d_->contactScratch.deepestContact;
+}
 
 bool World::isSleeping(BodyHandle h) const {
   return d_->slot(h).sleep.asleep;

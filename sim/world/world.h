@@ -171,6 +171,10 @@ class World {
   double time() const;  // seconds simulated since creation or reset
   const StepProfile& lastProfile() const;  // phases of the last step() call
   int lastContactCount() const;  // body–body contacts that carried load in the last sub-step
+  // Deepest penetration (m, ≥ 0) of a load-carrying contact (body or collider) of the last
+  // sub-step, as detected: before the solve pushed it out, so it shows how hard contacts work,
+  // not what is left inside.
+  double lastDeepestContact() const;
   std::vector<WorldEvent> takeEvents();  // returns and clears pending events
 
   // ---- sleep (WorldSettings::sleep) ----

@@ -210,3 +210,35 @@ TEST(WorldApi, DragPullsTheGrabbedPointTowardTheTarget) {
 
 }  // namespace
 }  // namespace sb
+
+namespace sb {
+namespace {
+
+// A rigid cube resting on the floor: each sub-step predicts every particle g·h² further down
+// (from rest), and the floor's contacts catch it, so the deepest contact as detected is g·h²
+// (± the contact gap, a small share of the spacing); in the air there is none.
+TEST(WorldApi, DeepestContactIsWhatGravityPredictsIntoTheFloorPerSubstep) {
+  for (double h : {1.0 / 240, 1.0 / 60}) {
+    WorldSettings settings = test::exactSubsteps(h);
+    settings.sleep = false;
+    World world(settings);
+    world.addCollider(Collider::plane(Vec3::UnitY(), 0.0));
+    BodyDef def;
+    def.positions = test::jitteredGrid(4, 0.4, Vec3(0, 0.5, 0), 1);
+    def.params.mode = Mode::Rigid;
+    def.params.alpha = 1.0;
+    const BodyHandle b = world.addBody(def);
+    world.step();
+    EXPECT_EQ(world.lastDeepestContact(), 0.0) << "in the air";
+    for (int s = 0; s < int(3.0 / h); ++s) world.step();
+    ASSERT_LT(world.positions(b).col(1).minCoeff(), 0.01);  // landed
+    const double expected = 9.81 * h * h;
+    EXPECT_GT(world.lastDeepestContact(), 0.5 * expected) << h;
+    EXPECT_LT(world.lastDeepestContact(), 2.0 * expected) << h;
+    std::printf("[ world    ] h %.4f s: deepest contact %.3g mm, g h^2 %.3g mm\n", h,
+                1e3 * world.lastDeepestContact(), 1e3 * expected);
+  }
+}
+
+}  // namespace
+}  // namespace sb
