@@ -10,6 +10,7 @@ if(SOFTBODY_BUILD_VIEWER)
     ${CMAKE_CURRENT_LIST_DIR}/viewer_bodies.cpp
     ${CMAKE_CURRENT_LIST_DIR}/viewer_input.cpp
     ${CMAKE_CURRENT_LIST_DIR}/viewer_params.cpp
+    ${CMAKE_CURRENT_LIST_DIR}/viewer_plots.cpp
     ${CMAKE_CURRENT_LIST_DIR}/viewer_ui.cpp
     ${CMAKE_CURRENT_LIST_DIR}/viewer_stats.cpp
   )

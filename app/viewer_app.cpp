@@ -266,6 +266,7 @@ void ViewerApp::resetSimulation() {
   scene_.world.reset();
   collectEvents();
   for (std::size_t i = 0; i < views_.size(); ++i) refreshClusters(static_cast<int>(i));
+  clearPlots();
   statusMessage_ = "reset";
 }
 
@@ -474,6 +475,7 @@ bool ViewerApp::openScene(const std::string& path) {
     savedText_ = sceneText(scene_, scene_.path);
     rememberFileParams();
     paramUndo_.clear();  // its handles were the old scene's
+    clearPlots();
     if (window_) glfwSetWindowTitle(window_, ("softbody - " + path).c_str());
     return true;
   } catch (const std::exception& e) {
@@ -578,6 +580,7 @@ int ViewerApp::run() {
     updateDragTarget();
     if (stepping) stepSimulation();
     timings_.lastSim = stepping ? millisecondsSince(simStart) : 0.0;
+    if (stepping) samplePlots();
 
     const Clock::time_point deformStart = Clock::now();
     updateMeshes();

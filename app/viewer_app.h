@@ -18,6 +18,7 @@
 
 #include <glm/glm.hpp>
 
+#include "app/plot_history.h"
 #include "app/viewer_options.h"
 #include "render/orbit_camera.h"
 #include "sim/scene/scene.h"
@@ -125,6 +126,12 @@ class ViewerApp {
   void undoParamEdit();                                           // Ctrl+Z
   void resetParamsToFile(BodyHandle body);                        // undoable
 
+  // ---- viewer_plots.cpp ----
+  void clearPlots();
+  void samplePlots();  // once per frame that stepped
+  void drawPlotsPanel();
+  void drawBodyKineticPlot(int body);
+
   // ---- viewer_input.cpp ----
   void installCallbacks();
   void onMouseButton(int button, int action, int mods);
@@ -224,6 +231,11 @@ class ViewerApp {
   };
   static constexpr std::size_t kMaxParamUndo = 200;
   std::vector<ParamEdit> fileParams_, paramUndo_;
+  // Plots of the last 10 s (viewer_plots.cpp), one sample per frame that stepped.
+  struct Plots {
+    PlotHistory kinetic, linearMomentum, angularMomentum, contacts, deepestContact, stepMs;
+    std::vector<PlotHistory> bodyKinetic;  // per body, in scene order
+  } plots_;
   bool quitDialog_ = false;        // the "unsaved changes" dialog is open
   std::string screenshotRequest_;  // path of a screenshot to take after this frame is drawn
   // A --screenshot or --stats file could not be written: the program exits with code 1.

@@ -42,6 +42,7 @@ void ViewerApp::onDrop(const std::vector<std::string>& paths) {
 
 void ViewerApp::bodiesChanged() {
   endDrag();
+  clearPlots();
   rebuildBodyViews();
   updateMeshes();
 }

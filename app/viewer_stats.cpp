@@ -56,6 +56,12 @@ bool ViewerApp::writeStats(const std::string& path) const {
   j["quitDialog"] = quitDialog_;
   j["bodyCount"] = scene_.bodies.size();
   j["paramUndo"] = paramUndo_.size();
+  j["plots"] = {{"samples", plots_.kinetic.count()},
+                {"kinetic", plots_.kinetic.last()},
+                {"linearMomentum", plots_.linearMomentum.last()},
+                {"angularMomentum", plots_.angularMomentum.last()},
+                {"contacts", plots_.contacts.last()},
+                {"deepestContactMm", plots_.deepestContact.last()}};
   json widgets = json::object();
   for (const auto& [name, r] : widgetRects_) widgets[name] = {r[0], r[1], r[2], r[3]};
   j["widgets"] = widgets;

@@ -144,6 +144,10 @@ void ViewerApp::drawPanel() {
         "inverted or torn meshes.");
   }
   if (ImGui::CollapsingHeader("Timings", ImGuiTreeNodeFlags_DefaultOpen)) drawTimingPanel();
+  const bool plotsOpen = ImGui::CollapsingHeader("Plots (last 10 s)");
+  recordWidget("plotsHeader");
+  tooltip("Kinetic energy, momenta, contacts, the deepest contact and the step time per frame.");
+  if (plotsOpen) drawPlotsPanel();
   if (ImGui::CollapsingHeader("Help")) {
     ImGui::TextWrapped(
         "Left drag: pull the surface point under the cursor.\n"
@@ -417,6 +421,7 @@ void ViewerApp::drawBodyPanel(int body) {
       }
     }
     ImGui::Text("%d particles, %d clusters", world.particleCount(h), world.clusterCount(h));
+    drawBodyKineticPlot(body);
     if (ImGui::SmallButton("duplicate")) duplicateRequest_ = body;
     recordWidget(("duplicate" + std::to_string(body)).c_str());
     tooltip("Add a copy of this body (as it would be saved) above the scene.");

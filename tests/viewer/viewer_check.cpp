@@ -9,7 +9,11 @@
 //       BODY's centre in AFTER minus BEFORE, along the camera's right axis, is at least MIN_METRES
 //   viewer_check still A.json B.json
 //       paused in both, B is a later frame, simulated time and every centre unchanged
+//   viewer_check plotted SHOT.png STATS WIDGET
+//       a line is drawn across the plot WIDGET: most pixel columns of its frame (the left half of
+//       the recorded rectangle; the label is on the right) hold a pixel of ImGui's plot-line grey
 // Exit code 0 = the check holds, 1 = it does not, 2 = bad input.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -156,6 +160,34 @@ int still(const std::string& aPath, const std::string& bPath) {
   return ok ? 0 : 1;
 }
 
+int plotted(const std::string& shotPath, const std::string& statsPath, const std::string& widget) {
+  const Image shot(shotPath);
+  const json stats = readJson(statsPath);
+  const json& r = stats.at("widgets").at(widget);
+  const int x0 = std::max(0, static_cast<int>(r[0].get<double>()) + 2);
+  const int y0 = std::max(0, static_cast<int>(r[1].get<double>()) + 2);
+  const int x1 =
+      std::min(shot.width - 1, static_cast<int>(0.5 * (r[0].get<double>() + r[2].get<double>())));
+  const int y1 = std::min(shot.height - 1, static_cast<int>(r[3].get<double>()) - 2);
+  int columns = 0, lined = 0;
+  for (int x = x0; x <= x1; ++x) {
+    ++columns;
+    for (int y = y0; y <= y1; ++y) {
+      const unsigned char* p = shot.at(x, y);
+      // ImGuiCol_PlotLines: grey (156, 156, 156); the frame is dark, the overlay text white.
+      const int lo = std::min({p[0], p[1], p[2]}), hi = std::max({p[0], p[1], p[2]});
+      if (hi - lo < 25 && lo >= 120 && hi <= 200) {
+        ++lined;
+        break;
+      }
+    }
+  }
+  const double share = columns ? static_cast<double>(lined) / columns : 0.0;
+  std::printf("%s: columns %d-%d, rows %d-%d: %.0f%% of the columns hold the plot line\n",
+              widget.c_str(), x0, x1, y0, y1, 100.0 * share);
+  return columns >= 40 && share >= 0.6 ? 0 : 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -193,6 +225,7 @@ int main(int argc, char** argv) {
     if (command == "moved" && argc == 6)
       return moved(argv[2], argv[3], std::stoi(argv[4]), std::stod(argv[5]));
     if (command == "still" && argc == 4) return still(argv[2], argv[3]);
+    if (command == "plotted" && argc == 5) return plotted(argv[2], argv[3], argv[4]);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "viewer_check: %s\n", e.what());
     return 2;
