@@ -262,6 +262,7 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
   contactScratch.resize(slots.size());
   scratch.pairs.clear();
   scratch.wake.clear();
+  scratch.triangleTests = scratch.triangleTestsOfAllPairs = 0;
   ++scratch.substeps;
   const int minParallel = layout.particles >= kMinParallelBodyWork ? 2 : INT32_MAX;
   for (int s : order) {
@@ -429,6 +430,7 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
   std::vector<std::vector<Contact>>& pairContacts = scratch.pairContacts;
   pairContacts.resize(contactPairs.size());
   scratch.pairDeep.assign(contactPairs.size(), 0);
+  scratch.pairTests.assign(contactPairs.size(), 0);
   const bool deepRound = scratch.substeps % kDeepSearchEvery == 0;
   parallelFor(static_cast<int>(contactPairs.size()), minParallel, [&](int k) {
     const ContactScratch::Pair& p = contactPairs[size_t(k)];
@@ -437,12 +439,18 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
     const bool deep =
         deepRound || std::binary_search(scratch.deepPairs.begin(), scratch.deepPairs.end(),
                                         std::make_pair(p.probe, p.obstacle));
-    scratch.pairDeep[size_t(k)] = findContacts(contactScratch[size_t(p.probe)].geometry,
-                                               contactScratch[size_t(p.obstacle)].geometry,
-                                               float(h), deep, pairContacts[size_t(k)]);
+    scratch.pairDeep[size_t(k)] = findContacts(
+        contactScratch[size_t(p.probe)].geometry, contactScratch[size_t(p.obstacle)].geometry,
+        float(h), deep, pairContacts[size_t(k)], &scratch.pairTests[size_t(k)]);
   });
   scratch.deepPairs.clear();
   for (size_t k = 0; k < contactPairs.size(); ++k) {
+    const ContactScratch::Pair& p = contactPairs[k];
+    scratch.triangleTests += scratch.pairTests[k];
+    if (!(slots[size_t(p.probe)].sleep.asleep && slots[size_t(p.obstacle)].sleep.asleep))
+      scratch.triangleTestsOfAllPairs +=
+          long(contactScratch[size_t(p.probe)].geometry.count) *
+          long(contactScratch[size_t(p.obstacle)].geometry.triangles->size());
     if (scratch.pairDeep[k])
       scratch.deepPairs.push_back({contactPairs[k].probe, contactPairs[k].obstacle});
     // An awake body touching a sleeping one wakes it (and its island).

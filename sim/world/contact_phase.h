@@ -86,6 +86,10 @@ struct ContactScratch {
   std::vector<Pair> pairs;
   std::vector<std::vector<Contact>> pairContacts;  // per pair
   std::vector<char> pairDeep;                      // per pair: found deep particles
+  std::vector<long> pairTests;                     // per pair: point–triangle tests made
+  // This sub-step's body–body narrow phase: point–triangle tests made, and the tests a pass of
+  // every probe particle over every obstacle triangle would make (Σ over the pairs looked at).
+  long triangleTests = 0, triangleTestsOfAllPairs = 0;
   // Bodies in sweep order, grown boxes and creation rank per slot, obstacle slots.
   std::vector<int> sweep, rank, obstacles;
   std::vector<Eigen::AlignedBox3f> boxes;

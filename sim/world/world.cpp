@@ -65,6 +65,7 @@ struct World::Data {
   WorkLayout layout;
   bool layoutDirty = true;  // bodies or clusters changed: the work lists must be rebuilt
   int contactCount = 0;
+  ContactWork contactWork;  // summed over the last step()'s sub-steps
   // Scratch of the phases, reused every sub-step (no allocations in the loop).
   GoalsScratch goalsScratch;
   ContactScratch contactScratch;
@@ -141,6 +142,8 @@ void World::Data::substep(double h, StepProfile& prof) {
                                 float(settings.rollingResistance), settings.gravity};
   timed(Phase::Contacts,
         [&] { runContactsPhase(layout, contact, h, slots, order, colliders, contactScratch); });
+  contactWork.triangleTests += contactScratch.triangleTests;
+  contactWork.triangleTestsOfAllPairs += contactScratch.triangleTestsOfAllPairs;
   timed(Phase::Solve, [&] {
     contactCount = runSolvePhase(layout, contact, h, slots, order, colliders, contactScratch);
   });
@@ -520,6 +523,7 @@ void World::step() {
 void World::step(double dt) {
   requireRange("step: dt", limits::timeStep, dt);
   const int n = substepsFor(dt);
+  d_->contactWork = ContactWork{};
   for (int s : d_->order) {
     BodySlot& b = d_->slots[size_t(s)];
     b.stepParams = paramsForSubstep(b.params, dt / n);
@@ -557,6 +561,9 @@ double World::time() const {
 }
 int World::lastContactCount() const {
   return d_->contactCount;
+}
+World::ContactWork World::lastContactWork() const {
+  return d_->contactWork;
 }
 double World::lastDeepestContact() const {
   return d_->contactScratch.deepestContact;

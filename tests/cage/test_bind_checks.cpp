@@ -4,7 +4,6 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include <chrono>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -142,7 +141,6 @@ TEST_F(BindChecks, NonRegularCacheEntriesAreRefusedNotRead) {
   bindMeanValue(points_, cage_, options_);
   fs::remove(cacheFile());
   ASSERT_EQ(::mkfifo(cacheFile().c_str(), 0600), 0);
-  const auto t0 = std::chrono::steady_clock::now();
   Embedding e = bindMeanValue(points_, cage_, options_);  // neither blocks nor reads for ever
   EXPECT_FALSE(e.stats().fromCache);
   ASSERT_FALSE(warnings_.empty());
@@ -159,7 +157,6 @@ TEST_F(BindChecks, NonRegularCacheEntriesAreRefusedNotRead) {
   EXPECT_FALSE(e.stats().fromCache);
   ASSERT_FALSE(warnings_.empty());  // then the write fails too: a folder cannot be replaced
   EXPECT_NE(warnings_.front().find("is a directory"), std::string::npos) << warnings_.front();
-  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 10.0);
 }
 
 TEST_F(BindChecks, MemoryIsEstimatedBeforeBinding) {

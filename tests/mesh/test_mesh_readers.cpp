@@ -4,7 +4,6 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -135,7 +134,6 @@ TEST(MeshReaders, HugeDeclaredCountsFailFastWithoutAllocating) {
       "property list uint int vertex_indices\nend_header\n";
   std::string stl(80, ' ');
   put<std::uint32_t>(stl, 0xffffffffu, false);
-  const auto t0 = std::chrono::steady_clock::now();
   EXPECT_ERROR(offSmall, MeshFormat::Off, "declares 999999 vertices");
   EXPECT_NE(errorOf(plySmall, MeshFormat::Ply), "");
   EXPECT_ERROR(boff, MeshFormat::Off, "declares 999999 vertices");
@@ -143,7 +141,6 @@ TEST(MeshReaders, HugeDeclaredCountsFailFastWithoutAllocating) {
   EXPECT_NE(errorOf(stl, MeshFormat::Stl), "");
   EXPECT_NE(
       errorOf("ply\nformat ascii 1.0\nelement junk 2000000000\nend_header\n", MeshFormat::Ply), "");
-  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 1.0);
 }
 
 TEST(MeshReaders, NonFiniteAndOutOfFloatRangeCoordinatesAreRefused) {
@@ -229,14 +226,12 @@ using MeshReaderFiles = sb::test_support::TempDirTest;
 TEST_F(MeshReaderFiles, NonRegularFilesAreRefusedAtOnce) {
   const std::string fifo = path("fifo.obj");
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
-  const auto t0 = std::chrono::steady_clock::now();
   try {
     readMesh(fifo);
     FAIL() << "FIFO accepted";
   } catch (const MeshError& e) {
     EXPECT_NE(std::string(e.what()).find("not a regular file"), std::string::npos) << e.what();
   }
-  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 5.0);
   fs::create_directories(path("folder.obj"));
   try {
     readMesh(path("folder.obj"));

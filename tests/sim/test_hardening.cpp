@@ -5,7 +5,6 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -53,13 +52,6 @@ bool allFinite(const Scene& s) {
       return false;
   return true;
 }
-
-double seconds(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
-// Time limits are for optimised builds; sanitizers slow everything down about this much.
-constexpr double kSanitizerSlowdown = test_support::kSanitized ? 10 : 1;
 
 // Restores the default thread count when a test ends.
 struct ThreadsGuard {
@@ -206,8 +198,8 @@ class HardeningFiles : public sb::test_support::TempDirTest {
   }
 };
 
+// Opening a FIFO would block for ever: a hang here shows as the test's CTest timeout.
 TEST_F(HardeningFiles, ScenePathsThatAreNotRegularFiles) {
-  const auto t0 = std::chrono::steady_clock::now();
   fs::create_directories(path("folder.json"));
   EXPECT_NE(loadError(path("folder.json")).find("is a directory"), std::string::npos);
   ASSERT_EQ(::mkfifo(path("fifo.json").c_str(), 0600), 0);
@@ -225,7 +217,6 @@ TEST_F(HardeningFiles, ScenePathsThatAreNotRegularFiles) {
   e = loadError(path("b.json"));
   EXPECT_NE(e.find("bodies[0].renderMesh"), std::string::npos) << e;
   EXPECT_NE(e.find("not a regular file"), std::string::npos) << e;
-  EXPECT_LT(seconds(t0), 10.0);  // nothing blocked
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -256,30 +247,50 @@ TEST(Hardening, LookupsOfFastParticlesVisitEachTriangleOnce) {
   EXPECT_LE(cells, SurfaceGrid::maxCellsPerLookup);
 }
 
-TEST(Hardening, PileAtTheLargestTimeStepFinishesAStepQuickly) {
-  // timeStep 10 s (the documented maximum) in sub-steps of 1 s, the longest accepted (the
-  // contact look-ups of long sub-steps are what is tested): one 10-s sub-step took ~64 s.
+// Contact look-ups whose reach spans a whole obstacle (fast particles, long sub-steps, a giant
+// body) once visited a triangle once per grid cell it overlaps: a pile at 10-s steps took ~64 s
+// for one step, and the large scene with one body scaled ×1001 did not finish 5 steps in 300 s.
+// Now a look-up visits each triangle of the obstacle at most once, and the deep search at most
+// once more (the grid's side: LookupsOfFastParticlesVisitEachTriangleOnce). Here the scenes
+// themselves, checked by counting, not timing: over a step, point–triangle tests ≤ 2 × (probe
+// particles × obstacle triangles) summed over the pairs looked at. (Measured: 1.6 % of that
+// for the pile, 0.3 % for the giant; the old per-cell visits could exceed it only where most
+// triangles are in reach, so the grid test above is the sharp one.)
+void expectContactLookUpsBounded(Scene& s, int steps, const char* what) {
+  long most = 0;
+  for (int i = 0; i < steps; ++i) {
+    s.world.step();
+    const World::ContactWork w = s.world.lastContactWork();
+    EXPECT_LE(w.triangleTests, 2 * w.triangleTestsOfAllPairs) << what << ", step " << i;
+    most = std::max(most, w.triangleTests);
+    std::printf(
+        "[ hardening] %s, step %d: %ld point-triangle tests, %.3g of all pairs' "
+        "particles x triangles\n",
+        what, i, w.triangleTests,
+        double(w.triangleTests) / double(std::max(1L, w.triangleTestsOfAllPairs)));
+  }
+  EXPECT_GT(most, 0) << what << ": no contact look-up ran";
+}
+
+TEST(Hardening, PileAtTheLargestTimeStepKeepsItsContactLookUpsBounded) {
+  // timeStep 10 s (the documented maximum) in sub-steps of 1 s, the longest accepted: every
+  // particle moves metres per sub-step, so look-ups reach across whole bodies.
   json j = withoutRenderMeshes(readJson(kScenes + "/pile.json"));
   j["world"]["timeStep"] = 10.0;
   j["world"]["substeps"] = 1;
   j["world"]["maxSubstep"] = 1.0;
   Scene s = sceneFrom(j);
-  const auto t0 = std::chrono::steady_clock::now();
-  for (int i = 0; i < 2; ++i) s.world.step();
-  EXPECT_LT(seconds(t0), 20.0 * kSanitizerSlowdown);
+  expectContactLookUpsBounded(s, 2, "pile at 10-s steps");
 }
 
-TEST(Hardening, LargeSceneWithAGiantBodyFinishesItsSteps) {
-  // One body of the large scene at scale 1001 (all others inside it, ~40,000 contacts per
-  // sub-step): 5 steps did not finish in 300 s; now about 1 s per step (Release), each
-  // particle's look-up costing at most one pass over the giant's triangles.
+TEST(Hardening, LargeSceneWithAGiantBodyKeepsItsContactLookUpsBounded) {
+  // One body of the large scene at scale 1001: all others inside it, ~40,000 contacts per
+  // sub-step.
   json j = withoutRenderMeshes(readJson(kScenes + "/large.json"));
   j["bodies"][0]["scale"] = 1001;
   Scene s = sceneFrom(j);
-  const auto t0 = std::chrono::steady_clock::now();
-  for (int i = 0; i < 2; ++i) s.world.step();
+  expectContactLookUpsBounded(s, 2, "large scene with a giant body");
   EXPECT_TRUE(allFinite(s));
-  EXPECT_LT(seconds(t0), 60.0 * kSanitizerSlowdown);
 }
 
 // ---------------------------------------------------------------------------------------------

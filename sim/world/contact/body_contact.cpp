@@ -64,7 +64,8 @@ bool consider(const ContactGeometry& obstacle, const Vec3f& p, int t, Closest& b
 }  // namespace
 
 bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle, float h, bool deep,
-                  std::vector<Contact>& out) {
+                  std::vector<Contact>& out, long* triangleTests) {
+  long tests = 0;
   const std::vector<mesh::Triangle>& tris = *obstacle.triangles;
   const SurfaceGrid& grid = *obstacle.grid;
   bool foundDeep = false;
@@ -100,6 +101,7 @@ bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle,
       grid.forEachCell(p, extra + drift, [&](const SurfaceGrid::Range& range) {
         for (const int* t = range.begin; t != range.end; ++t) {
           if (grid.boxDistanceSquared(*t, p) > bound) continue;  // cannot be closer
+          ++tests;
           if (consider(obstacle, p, *t, best)) {
             const float d = std::sqrt(best.distanceSquared);
             bound = drift > 0.0f ? (d + drift) * (d + drift) : best.distanceSquared;
@@ -120,6 +122,7 @@ bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle,
       best.distanceSquared = std::numeric_limits<float>::infinity();
       float deepBound = best.distanceSquared;
       auto take = [&](int t) {
+        ++tests;
         if (consider(obstacle, p, t, best)) {
           const float d = std::sqrt(best.distanceSquared);
           deepBound = drift > 0.0f ? (d + drift) * (d + drift) : best.distanceSquared;
@@ -212,6 +215,7 @@ bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle,
     }
     out.push_back({i, best.triangle, best.point.weights, normal, inside ? -distance : distance});
   }
+  if (triangleTests) *triangleTests += tests;
   return foundDeep;
 }
 

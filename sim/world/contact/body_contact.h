@@ -68,7 +68,9 @@ struct Contact {
 //
 // deep: also search the whole surface for particles inside the obstacle's box that have no
 // triangle in reach (overlapping starts, fast drags); returns whether it found any inside.
+// triangleTests, when given, grows by the number of point–triangle tests made: at most two per
+// particle and triangle (the grid's look-up visits a triangle once, the deep search once).
 bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle, float h, bool deep,
-                  std::vector<Contact>& out);
+                  std::vector<Contact>& out, long* triangleTests = nullptr);
 
 }  // namespace sb
