@@ -386,8 +386,9 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMe
 // nlohmann keeps the last silently) and reports every error with its line and field path.
 class CheckedSax {
  public:
-  CheckedSax(json& root, const char* begin, const char* const* cursor)
-      : dom_(root, true), begin_(begin), cursor_(cursor) {}
+  // keyOrder (may be null) receives the order of the keys per kind of object (SceneKeyOrder).
+  CheckedSax(json& root, const char* begin, const char* const* cursor, SceneKeyOrder* keyOrder)
+      : dom_(root, true), begin_(begin), cursor_(cursor), keyOrder_(keyOrder) {}
   bool null() { return value() && dom_.null(); }
   bool boolean(bool v) { return value() && dom_.boolean(v); }
   bool number_integer(json::number_integer_t v) { return value() && dom_.number_integer(v); }
@@ -404,11 +405,22 @@ class CheckedSax {
   }
   bool key(std::string& k) {
     Frame& f = frames_.back();
+    const std::string previous = f.key;  // the key before k in this object ("" for the first)
     f.key = k;
     if (!f.keys.insert(k).second) {
       error_ = "line " + std::to_string(lineAt(size_t(*cursor_ - begin_))) + ": " + path() +
                ": duplicate key (each key may appear once per object)";
       return false;
+    }
+    if (keyOrder_) {
+      // A key new to this kind of object goes right after the key before it in this object
+      // (the first at the front): every object's keys stay in their order, so saving and
+      // loading again keeps the same order, and the same bytes.
+      std::vector<std::string>& keys = (*keyOrder_)[objectKind()];
+      if (std::find(keys.begin(), keys.end(), k) == keys.end()) {
+        const auto after = std::find(keys.begin(), keys.end(), previous);
+        keys.insert(after == keys.end() ? keys.begin() : after + 1, k);
+      }
     }
     return dom_.key(k);
   }
@@ -455,6 +467,18 @@ class CheckedSax {
     }
     return p;
   }
+  // The kind of the object whose key is being read: its path with array indices dropped.
+  std::string objectKind() const {
+    std::string p;
+    for (size_t i = 0; i + 1 < frames_.size(); ++i) {
+      const Frame& f = frames_[i];
+      if (f.array)
+        p += "[]";
+      else
+        p += (p.empty() ? "" : ".") + f.key;
+    }
+    return p;
+  }
   long lineAt(size_t offset) const {
     const char* end = begin_ + offset;
     return 1 + std::count(begin_, end, '\n');
@@ -464,6 +488,7 @@ class CheckedSax {
   const char* const* cursor_;
   std::vector<Frame> frames_;
   std::string error_;
+  SceneKeyOrder* keyOrder_;
 };
 
 // A char iterator that tells how far the parser has read (for the line of a duplicate key).
@@ -489,10 +514,11 @@ struct TrackingIterator {
   bool operator!=(const TrackingIterator& o) const { return p != o.p; }
 };
 
-json parseJson(const std::string& text, const std::string& name) {
+json parseJson(const std::string& text, const std::string& name,
+               SceneKeyOrder* keyOrder = nullptr) {
   json root;
   const char* cursor = text.data();
-  CheckedSax sax(root, text.data(), &cursor);
+  CheckedSax sax(root, text.data(), &cursor, keyOrder);
   const bool ok = json::sax_parse(TrackingIterator{text.data(), &cursor},
                                   TrackingIterator{text.data() + text.size(), &cursor}, &sax);
   if (!ok || !sax.error().empty())
@@ -503,7 +529,8 @@ json parseJson(const std::string& text, const std::string& name) {
 }  // namespace
 
 Scene parseScene(const std::string& text, const std::string& name, const std::string& baseDir) {
-  const json root = parseJson(text, name);
+  SceneKeyOrder keyOrder;
+  const json root = parseJson(text, name, &keyOrder);
   Fields top(root, "", name);
   WorldSettings settings;
   if (top.has("world")) {
@@ -526,6 +553,7 @@ Scene parseScene(const std::string& text, const std::string& name, const std::st
     w.rejectUnknown();
   }
   Scene scene;
+  scene.keyOrder = std::move(keyOrder);
   scene.world = World(settings);
   if (top.has("colliders")) {
     const json& list = top.raw("colliders");
@@ -596,7 +624,8 @@ Scene loadScene(const std::string& path) {
 
 namespace {
 
-// Saved files keep their keys in the order the shipped scenes use (an ordered object, not
+// Saved files keep their keys in the order of the file the scene came from (Scene::keyOrder), and
+// keys that file did not have in the order the shipped scenes use (an ordered object, not
 // nlohmann::json's sorted one), so a saved file reads like the one it came from and saving twice
 // gives the same bytes.
 using ordered_json = nlohmann::ordered_json;
@@ -717,6 +746,27 @@ ordered_json bodyJson(const World& w, const SceneBody& b, const std::string& fro
   return j;
 }
 
+// `j` with every object's keys in the order of SceneKeyOrder `order` for its kind, then the
+// keys the file did not have in the order they come in `j`.
+ordered_json inFileOrder(const ordered_json& j, const std::string& kind,
+                         const SceneKeyOrder& order) {
+  if (j.is_array()) {
+    ordered_json out = ordered_json::array();
+    for (const ordered_json& e : j) out.push_back(inFileOrder(e, kind + "[]", order));
+    return out;
+  }
+  if (!j.is_object()) return j;
+  auto kindOf = [&](const std::string& key) { return kind.empty() ? key : kind + "." + key; };
+  ordered_json out = ordered_json::object();
+  const auto file = order.find(kind);
+  if (file != order.end())
+    for (const std::string& k : file->second)
+      if (j.contains(k)) out[k] = inFileOrder(j[k], kindOf(k), order);
+  for (auto e = j.begin(); e != j.end(); ++e)
+    if (!out.contains(e.key())) out[e.key()] = inFileOrder(e.value(), kindOf(e.key()), order);
+  return out;
+}
+
 }  // namespace
 
 std::string sceneText(const Scene& scene, const std::string& path) {
@@ -740,7 +790,7 @@ std::string sceneText(const Scene& scene, const std::string& path) {
   for (const SceneBody& b : scene.bodies)
     if (w.contains(b.handle)) root["bodies"].push_back(bodyJson(w, b, fromDir, toDir));
   std::ostringstream out;
-  writeJson(out, root, 0);
+  writeJson(out, scene.keyOrder.empty() ? root : inFileOrder(root, "", scene.keyOrder), 0);
   out << "\n";
   return out.str();
 }

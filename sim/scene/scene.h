@@ -7,6 +7,7 @@
 #pragma once
 
 #include <array>
+#include <map>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -65,8 +66,15 @@ struct SceneBody {
   bool contact = true;           // the cage is the body's surface for body–body contact
 };
 
+// The order of the keys in the file a scene came from, per kind of object: "" the top level,
+// "world", "colliders[]", "bodies[]", "bodies[].clusters", … (array indices dropped), each in
+// first-seen order. Saving writes an object's keys in this order first, then the keys the file
+// did not have in the shipped scenes' order, so a saved file reads like the one it came from.
+using SceneKeyOrder = std::map<std::string, std::vector<std::string>>;
+
 struct Scene {
-  std::string path;  // the file it was loaded from, or empty
+  std::string path;        // the file it was loaded from, or empty
+  SceneKeyOrder keyOrder;  // of that file (empty: the shipped scenes' order)
   World world;
   std::vector<SceneBody> bodies;  // in file order; handles refer into world
 

@@ -101,6 +101,51 @@ TEST(Scene, ErrorsNameFileFieldAndReason) {
                    "bodies[0].mesh: cannot bind the render mesh");
 }
 
+// A hand-written file's key order is kept by saving: its keys in its order (per kind of
+// object, bodies with keys the others lack included), then the keys it did not have; saving the
+// saved file again gives the same bytes.
+TEST(Scene, SaveKeepsTheKeyOrderOfTheFileItCameFrom) {
+  const std::string mesh = kAssets + "/meshes/suzanne_cage.obj";
+  const std::string text = R"({"bodies": [)"
+                           R"({"alpha": 0.3, "mesh": ")" +
+                           mesh +
+                           R"(", "name": "a"},)"
+                           R"({"name": "b", "damping": 0.2, "mesh": ")" +
+                           mesh +
+                           R"(", "translation": [0, 2, 0], "alpha": 0.4,)"
+                           R"( "clusters": {"overlap": 0.3, "kind": "grid", "cellSize": 0.6}}],)"
+                           R"( "world": {"substeps": 2, "gravity": [0, -9.81, 0]}})";
+  const Scene scene = parseScene(text, "order.json", kAssets);
+  const std::string saved = sceneText(scene, kAssets + "/order.json");
+  // Where each key is first written (-1: missing).
+  auto at = [&](const std::string& key, std::size_t from = 0) {
+    const std::size_t p = saved.find("\"" + key + "\":", from);
+    return p == std::string::npos ? -1L : long(p);
+  };
+  ASSERT_GE(at("bodies"), 0);
+  EXPECT_LT(at("bodies"), at("world")) << saved;      // the file's top-level order
+  EXPECT_LT(at("world"), at("colliders")) << saved;   // then what the file did not have
+  EXPECT_LT(at("substeps"), at("gravity")) << saved;  // world: the file's order
+  EXPECT_LT(at("gravity"), at("timeStep")) << saved;  // then the rest
+  // Body a: alpha, mesh, name as written; body b's damping and translation go where b had them
+  // (after name, after mesh), before the keys neither had.
+  const long a = at("alpha");
+  EXPECT_LT(a, at("mesh")) << saved;
+  EXPECT_LT(at("mesh"), at("name")) << saved;
+  const long b = at("name", std::size_t(at("name") + 1));
+  ASSERT_GT(b, a);
+  const std::size_t bFrom = std::size_t(at("alpha", std::size_t(a + 1)));  // body b's alpha
+  EXPECT_LT(long(bFrom), at("mesh", bFrom)) << saved;
+  EXPECT_LT(at("mesh", bFrom), at("name", bFrom)) << saved;
+  EXPECT_LT(at("name", bFrom), at("damping", bFrom)) << saved;
+  EXPECT_LT(at("damping", bFrom), at("mode", bFrom)) << saved;
+  EXPECT_LT(at("overlap", bFrom), at("kind", bFrom)) << saved;  // nested objects too
+  EXPECT_LT(at("kind", bFrom), at("cellSize", bFrom)) << saved;
+  // Saved, loaded and saved again: the same bytes.
+  const Scene back = parseScene(saved, "saved.json", kAssets);
+  EXPECT_EQ(sceneText(back, kAssets + "/order.json"), saved);
+}
+
 TEST(Scene, SaveRoundTripsParametersAtomically) {
   Scene scene = loadScene(defaultScenePath());
   const BodyHandle h = scene.bodies[0].handle;
