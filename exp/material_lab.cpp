@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "sim/world/param_ranges.h"
 #include "sim/world/world.h"
 
 using namespace sb;
@@ -23,6 +24,17 @@ static std::vector<Vec3> boxSurface(int nx, int ny, int nz, const Vec3& size, co
   return p;
 }
 
+// dt in `sub` sub-steps exactly (maxSubstep at its largest, 1 s: not split for dt ≤ 1 s), sleep
+// off so the motion itself is measured.
+WorldSettings settingsFor(double dt, int sub) {
+  WorldSettings s;
+  s.timeStep = dt;
+  s.substeps = sub;
+  s.maxSubstep = limits::maxSubstep.hi;
+  s.sleep = false;
+  return s;
+}
+
 // A plastic box (0.6 m lattice, linear β 0.5, 8 grid clusters) dropped 1 m onto the floor, 4 s:
 // its height afterwards (the dent) at 1 to 16 sub-steps per frame.
 int dent(double alpha, double dt) {
@@ -36,12 +48,7 @@ int dent(double alpha, double dt) {
     def.clusters.kind = ClusterDef::Kind::Grid;
     def.clusters.cellSize = 0.3;
     def.clusters.overlap = 0.1;
-    WorldSettings s;
-    s.timeStep = dt;
-    s.substeps = sub;
-    s.maxSubstep = 10;
-    s.sleep = false;
-    World world(s);
+    World world(settingsFor(dt, sub));
     world.addCollider(Collider::plane(Vec3::UnitY(), 0.0));
     const BodyHandle b = world.addBody(def);
     for (int k = 0; k < int(4.0 / dt); ++k) world.step();
@@ -77,12 +84,7 @@ int main(int argc, char** argv) {
       def.clusters.cellSize = cell;
       def.clusters.overlap = 0.5 * cell;
     }
-    WorldSettings s;
-    s.timeStep = dt;
-    s.substeps = sub;
-    s.maxSubstep = 10;
-    s.sleep = false;
-    World world(s);
+    World world(settingsFor(dt, sub));
     const BodyHandle b = world.addBody(def);
     for (int k = 0; k < int(6.0 / dt); ++k) world.step();
     const auto x = world.positions(b);
