@@ -345,10 +345,9 @@ void ViewerApp::drawBodyPanel(int body) {
     changed |=
         sliderDouble("restitution", &p.restitution, 0.0f, 1.0f, "%.2f",
                      "Restitution, [0, 1]: share of the approach speed an impact gives back\n"
-                     "(0 = no bounce);\n"
-                     "a contact uses the larger of its two sides'. Impacts faster than the\n"
-                     "threshold (1 m/s) rebound e^2 of the fall height, soft bodies too\n"
-                     "(their impact is one event of the two bodies as a whole).");
+                     "(0 = no bounce); a contact uses the larger of its two sides'. Impacts\n"
+                     "faster than the threshold (1 m/s) rebound e^2 of the fall height, soft\n"
+                     "bodies too (their impact is one event of the two bodies as a whole).");
     track();
     changed |= sliderDouble("c_yield", &p.plasticity.yield, 0.0f, 1.0f, "%.3f",
                             "Plastic yield, >= 0 (slider 0 to 1): stretch ||S - I|| above which\n"
@@ -357,8 +356,8 @@ void ViewerApp::drawBodyPanel(int body) {
     record("c_yield");
     changed |= sliderDouble("c_creep", &p.plasticity.creep, 0.0f, 20.0f, "%.2f",
                             "Plastic creep rate in 1/s, >= 0 (slider 0 to 20; 0 = no plasticity):\n"
-                            "a sub-step absorbs\n"
-                            "1 - exp(-h creep) of the stretch beyond the yield.");
+                            "a sub-step of h seconds absorbs 1 - exp(-h creep) of the stretch\n"
+                            "beyond the yield.");
     track();
     record("c_creep");
     changed |= sliderDouble("c_max", &p.plasticity.max, 0.0f, 2.0f, "%.3f",
