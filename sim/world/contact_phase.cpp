@@ -32,22 +32,35 @@ bool lessKey(const ContactScratch::Warm& a, const ContactScratch::Warm& b) {
   return a.key < b.key;
 }
 
-// Sets up the detection view of the body in slot s.
-void prepareGeometry(const BodySlot& b, ContactScratch::Body& cs) {
+// The bounding box the body-body detection sees the body in slot s in
+// (ContactScratch::Body::frameShift).
+Eigen::AlignedBox3f detectionBox(const ContactScratch::Body& cs) {
+  return Eigen::AlignedBox3f(cs.box.min() + cs.frameShift, cs.box.max() + cs.frameShift);
+}
+
+// Sets up the detection view of the body in slot s; a sleeping body is seen moved by its frame
+// shift (ContactScratch::Body::frameShift) at the sub-step of h seconds.
+void prepareGeometry(const BodySlot& b, float h, ContactScratch::Body& cs) {
   const BodyModel& m = *b.model;
   ContactGeometry& g = cs.geometry;
+  const bool shifted = b.sleep.asleep;
+  if (shifted) {
+    cs.detectX = b.state.x.rowwise() + cs.frameShift.transpose();
+    cs.detectV.resize(b.state.v.rows(), 3);
+    cs.detectV.rowwise() = cs.frameShift.transpose() / h;
+  }
   for (int a = 0; a < 3; ++a) {
-    g.x[a] = b.state.x.col(a).data();
-    g.v[a] = b.state.v.col(a).data();
+    g.x[a] = (shifted ? cs.detectX : b.state.x).col(a).data();
+    g.v[a] = (shifted ? cs.detectV : b.state.v).col(a).data();
   }
   g.count = m.particleCount();
   g.triangles = &m.surface;
   g.topology = &m.surfaceTopology;
   g.grid = &cs.grid;
-  g.box = cs.box;
+  g.box = detectionBox(cs);
   g.gap = kContactGap * m.spacing;
   g.margin = kContactMargin * m.spacing;
-  g.meanVelocity = cs.meanVelocity;
+  g.meanVelocity = cs.meanVelocity + cs.frameShift / h;
   g.maxRelativeSpeed = cs.maxRelativeSpeed;
 }
 
@@ -270,6 +283,8 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
     cs.obstacle = false;
     cs.involved = false;
     cs.staticHits.clear();
+    cs.frameShift = slots[size_t(s)].sleep.asleep ? Vec3f((h * h * settings.gravity).cast<float>())
+                                                  : Vec3f::Zero();
   }
   const bool bodyPairs = settings.bodyContact && order.size() >= 2;
   // Bounds and speeds of every body: what the body–body broad and narrow phases need.
@@ -332,7 +347,7 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
     return m.surface.empty() ? 0.0f : (kContactGap + kContactMargin) * m.spacing;
   };
   auto grown = [&](int s) {
-    Eigen::AlignedBox3f box = contactScratch[size_t(s)].box;
+    Eigen::AlignedBox3f box = detectionBox(contactScratch[size_t(s)]);
     box.min().array() -= reachOf(s) + travel;
     box.max().array() += reachOf(s) + travel;
     return box;
@@ -391,7 +406,7 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
       cs.region.setEmpty();
     }
     cs.obstacle = true;
-    Eigen::AlignedBox3f probeBox = contactScratch[size_t(p.probe)].box;
+    Eigen::AlignedBox3f probeBox = detectionBox(contactScratch[size_t(p.probe)]);
     probeBox.min().array() -= travel;
     probeBox.max().array() += travel;
     cs.region.extend(probeBox);
@@ -399,12 +414,12 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
   }
   for (int s : order)
     if (contactScratch[size_t(s)].involved)
-      prepareGeometry(slots[size_t(s)], contactScratch[size_t(s)]);
+      prepareGeometry(slots[size_t(s)], float(h), contactScratch[size_t(s)]);
   parallelFor(static_cast<int>(obstacles.size()), minParallel, [&](int k) {
     const int s = obstacles[size_t(k)];
     const BodyModel& m = *slots[size_t(s)].model;
-    const MatX3f& x = slots[size_t(s)].state.x;
     ContactScratch::Body& cs = contactScratch[size_t(s)];
+    const MatX3f& x = slots[size_t(s)].sleep.asleep ? cs.detectX : slots[size_t(s)].state.x;
     // The grid is kept while the surface has moved less than a quarter spacing since it was
     // built and the region still fits: lookups then widen by that drift (findContacts), so
     // resting and slowly moving bodies skip the rebuild.
@@ -439,9 +454,16 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
     const bool deep =
         deepRound || std::binary_search(scratch.deepPairs.begin(), scratch.deepPairs.end(),
                                         std::make_pair(p.probe, p.obstacle));
-    scratch.pairDeep[size_t(k)] = findContacts(
-        contactScratch[size_t(p.probe)].geometry, contactScratch[size_t(p.obstacle)].geometry,
-        float(h), deep, pairContacts[size_t(k)], &scratch.pairTests[size_t(k)]);
+    const ContactScratch::Body& probe = contactScratch[size_t(p.probe)];
+    const ContactScratch::Body& obstacle = contactScratch[size_t(p.obstacle)];
+    std::vector<Contact>& found = pairContacts[size_t(k)];
+    scratch.pairDeep[size_t(k)] = findContacts(probe.geometry, obstacle.geometry, float(h), deep,
+                                               found, &scratch.pairTests[size_t(k)]);
+    // Distances found in the detection's frame, carried back to the actual positions (the
+    // solver's start). One side at most is shifted, all of it by the same vector.
+    const Vec3f shift = probe.frameShift - obstacle.frameShift;
+    if (shift != Vec3f::Zero())
+      for (Contact& c : found) c.distance -= c.normal.dot(shift);
   });
   scratch.deepPairs.clear();
   for (size_t k = 0; k < contactPairs.size(); ++k) {

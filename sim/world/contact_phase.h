@@ -71,6 +71,16 @@ struct ContactScratch {
     Eigen::AlignedBox3f gridRegion;
     const BodyModel* gridModel = nullptr;
     std::vector<StaticHit> staticHits;
+    // Where the body-body detection sees a sleeping body: moved by what gravity moves an awake
+    // body in the sub-step's prediction (h²·g), with the velocity h·g that reaches it. An awake
+    // body's particles are detected at their predicted positions; a sleeping body does not
+    // move. Compared as they are, a body resting on a sleeping one was seen h²·g below its rest
+    // (9.8 m at 1-s sub-steps), beside or under its neighbour, and held there by the contacts
+    // made from it: piles sank step by step whenever one group fell asleep. In this frame the
+    // two stand as they rest. Contact distances are carried back to the actual positions, which
+    // the solver starts from: the same plane, so the constraint is unchanged but well chosen.
+    Vec3f frameShift = Vec3f::Zero();  // metres; zero for awake bodies
+    MatX3f detectX, detectV;           // #P × 3, metres and m/s: sleeping involved bodies only
   };
   // A probe body whose particles are tested against an obstacle body's surface (slots).
   struct Pair {
