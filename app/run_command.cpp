@@ -163,14 +163,17 @@ int runHeadlessCommand(int argc, char** argv) {
     }
   }
   SceneRunner runner(scene, !noDeform);
-  long long particles = 0, renderVertices = 0;
-  for (const SceneBody& b : scene.bodies) particles += scene.world.particleCount(b.handle);
+  long long particles = 0, clusters = 0, renderVertices = 0;
+  for (const SceneBody& b : scene.bodies) {
+    particles += scene.world.particleCount(b.handle);
+    clusters += scene.world.clusterCount(b.handle);
+  }
   for (const PointsRowMajor& mesh : runner.renderMeshes()) renderVertices += mesh.rows();
   std::printf(
-      "%s: %zu bodies, %lld particles, %lld render vertices, dt %.6g s, %d substeps, "
-      "%d threads\n",
-      scenePath.c_str(), scene.bodies.size(), particles, renderVertices, settings.timeStep,
-      scene.world.substepsFor(settings.timeStep), threadCount());
+      "%s: %zu bodies, %lld particles, %lld clusters, %lld render vertices, dt %.6g s, "
+      "%d substeps, %d threads\n",
+      scenePath.c_str(), scene.bodies.size(), particles, clusters, renderVertices,
+      settings.timeStep, scene.world.substepsFor(settings.timeStep), threadCount());
 
   RunMonitor watch(scene.world);
   int exported = 0;
