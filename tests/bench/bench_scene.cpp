@@ -48,6 +48,27 @@ BENCHMARK(BM_LargeScene)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
+// The source's big scene (issue 13, assets/scenes/seed-scale.json: 384 bodies, 55,092
+// particles, 2,448 clusters, 584k render vertices): simulation, collisions and the deform of
+// every render mesh while the pile forms, timed from 1 s (the lower layers have landed) over
+// the next 0.5 s. Arg: threads.
+void BM_SeedScale(benchmark::State& state) {
+  setThreadCount(int(state.range(0)));
+  Scene scene = loadScene(kAssets + "/scenes/seed-scale.json");
+  for (int s = 0; s < 60; ++s) scene.world.step();
+  SceneRunner runner(scene, /*deform=*/true);
+  for (auto _ : state) runner.step();
+  reportPhases(state, runner.totals());
+  state.counters["bodies"] = double(scene.bodies.size());
+  setThreadCount(0);
+}
+BENCHMARK(BM_SeedScale)
+    ->Arg(1)
+    ->Arg(2)
+    ->Iterations(30)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
 // The large scene once every body sleeps (issue 11: a resting scene should cost next to
 // nothing): stepped until all sleep (4.4 s simulated), then timed with the render-mesh deform.
 void BM_LargeSceneAsleep(benchmark::State& state) {
