@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -12,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "sim/base/parallel.h"
+#include "sim/mesh/closest_point.h"
 #include "sim/mesh/mesh_io.h"
 #include "sim/scene/frame_export.h"
 #include "sim/scene/scene.h"
@@ -76,7 +78,8 @@ TEST(Hardening, EmptySurfaceGridVisitsNothing) {
   EXPECT_TRUE(grid.empty());
   int visits = 0;
   for (float extra : {0.0f, 3.0f, 1e3f, 1e30f, INFINITY})
-    grid.forEachCell(Vec3f(3, 3, 3), extra, [&](const SurfaceGrid::Range&) { ++visits; });
+    grid.forEachNear(
+        Vec3f(3, 3, 3), extra, [] { return INFINITY; }, [&](int) { ++visits; });
   EXPECT_EQ(visits, 0);
   const SurfaceGrid::Range r = grid.candidates(Vec3f(3, 3, 3));
   EXPECT_EQ(r.begin, r.end);
@@ -224,7 +227,8 @@ TEST_F(HardeningFiles, ScenePathsThatAreNotRegularFiles) {
 
 TEST(Hardening, LookupsOfFastParticlesVisitEachTriangleOnce) {
   // A sphere-like surface, gridded over a wide region; a particle asking with a huge reach
-  // (a fast particle, a long sub-step) gets the triangle list once, not up to 48³ cells.
+  // (a fast particle, a long sub-step) gets each triangle within its bound once, not up to 48³
+  // cells' worth, and the closest triangle comes out as a pass over every triangle finds it.
   const mesh::TriangleMesh cage = mesh::readMesh(kAssets + "/meshes/bunny_cage.obj");
   std::vector<float> x, y, z;
   for (const Vec3& v : cage.vertices) {
@@ -235,16 +239,91 @@ TEST(Hardening, LookupsOfFastParticlesVisitEachTriangleOnce) {
   SurfaceGrid grid;
   grid.build(cage.triangles, x.data(), y.data(), z.data(), 0.01f, 0.005f,
              Eigen::AlignedBox3f(Vec3f::Constant(-10), Vec3f::Constant(10)));
+  const int triangles = int(cage.triangles.size());
+  auto pointOf = [&](int v) { return Vec3f(x[size_t(v)], y[size_t(v)], z[size_t(v)]); };
+  auto distanceSquared = [&](int t, const Vec3f& p) {
+    const mesh::Triangle& f = cage.triangles[size_t(t)];
+    const Vec3f a = pointOf(f[0]), b = pointOf(f[1]), c = pointOf(f[2]);
+    const mesh::TrianglePoint<float> q = mesh::closestPointOnTriangle(p, a, b, c);
+    return (p - (q.weights[0] * a + q.weights[1] * b + q.weights[2] * c)).squaredNorm();
+  };
   for (float extra : {10.0f, 1e4f, 1e30f}) {
-    long long entries = 0;
-    grid.forEachCell(Vec3f(0, 0, 0), extra,
-                     [&](const SurfaceGrid::Range& r) { entries += r.end - r.begin; });
-    EXPECT_EQ(entries, static_cast<long long>(cage.triangles.size())) << extra;
+    // Unbounded: every triangle, once each.
+    std::vector<int> seen(size_t(triangles), 0);
+    grid.forEachNear(
+        Vec3f(0, 0, 0), extra, [] { return INFINITY; }, [&](int t) { ++seen[size_t(t)]; });
+    EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), triangles) << extra;
+    // The closest-triangle search of the contacts, the bound lowered as it goes, against a pass
+    // over all triangles, from points around and inside the surface.
+    for (const Vec3f& p : {Vec3f(0, 0, 0), Vec3f(0.3f, -0.2f, 0.1f), Vec3f(-2, 1, 0.5f),
+                           Vec3f(0.05f, 0.4f, -0.3f)}) {
+      int best = -1, visits = 0;
+      float bound = INFINITY;
+      grid.forEachNear(
+          p, extra, [&] { return bound; },
+          [&](int t) {
+            ++visits;
+            const float d = distanceSquared(t, p);
+            if (d < bound || (d == bound && t < best)) bound = d, best = t;
+          });
+      int brute = 0;
+      for (int t = 1; t < triangles; ++t)
+        if (distanceSquared(t, p) < distanceSquared(brute, p)) brute = t;
+      EXPECT_EQ(best, brute) << extra << " at " << p.transpose();
+      EXPECT_LT(visits, triangles / 4) << "the bound prunes most of the surface";
+    }
   }
-  // A slow particle still asks a few cells only.
-  int cells = 0;
-  grid.forEachCell(Vec3f(0, 0, 0), 1e-4f, [&](const SurfaceGrid::Range&) { ++cells; });
-  EXPECT_LE(cells, SurfaceGrid::maxCellsPerLookup);
+  // A slow particle still asks a few cells only: the triangles in them, each box within reach.
+  int visits = 0;
+  grid.forEachNear(
+      Vec3f(0, 0, 0), 1e-4f, [] { return 0.0101f * 0.0101f; }, [&](int) { ++visits; });
+  EXPECT_LE(visits, triangles / 4);
+}
+
+TEST(Hardening, LookupsInACrumpledSurfaceFindTheClosestTriangle) {
+  // The whole cage in one cell (a body folded onto itself, as a soft body under a pile at α ≈ 0):
+  // a slow particle's look-up met every triangle of the cell, each rejected by its box (a soak
+  // spent 550 ms per step so). With more entries than maxEntriesPerLookup the box tree answers
+  // instead; the closest triangle must still be the one a pass over all triangles finds.
+  const mesh::TriangleMesh cage = mesh::readMesh(kAssets + "/meshes/bunny_cage.obj");
+  std::vector<float> x, y, z;
+  for (const Vec3& v : cage.vertices) {
+    x.push_back(float(v.x()));
+    y.push_back(float(v.y()));
+    z.push_back(float(v.z()));
+  }
+  const int triangles = int(cage.triangles.size());
+  SurfaceGrid grid;
+  grid.build(cage.triangles, x.data(), y.data(), z.data(), 0.01f, 20.0f,
+             Eigen::AlignedBox3f(Vec3f::Constant(-10), Vec3f::Constant(10)));
+  ASSERT_EQ(grid.candidates(Vec3f(0, 0, 0)).end - grid.candidates(Vec3f(0, 0, 0)).begin, triangles);
+  ASSERT_GT(triangles, SurfaceGrid::maxEntriesPerLookup);
+  auto pointOf = [&](int v) { return Vec3f(x[size_t(v)], y[size_t(v)], z[size_t(v)]); };
+  auto distanceSquared = [&](int t, const Vec3f& p) {
+    const mesh::Triangle& f = cage.triangles[size_t(t)];
+    const Vec3f a = pointOf(f[0]), b = pointOf(f[1]), c = pointOf(f[2]);
+    const mesh::TrianglePoint<float> q = mesh::closestPointOnTriangle(p, a, b, c);
+    return (p - (q.weights[0] * a + q.weights[1] * b + q.weights[2] * c)).squaredNorm();
+  };
+  for (int near = 0; near < triangles; near += 7) {
+    const mesh::Triangle& f = cage.triangles[size_t(near)];
+    const Vec3f p =
+        (pointOf(f[0]) + pointOf(f[1]) + pointOf(f[2])) / 3.0f + Vec3f(0.003f, -0.002f, 0.001f);
+    int best = -1, visits = 0;
+    float bound = 0.02f * 0.02f;
+    grid.forEachNear(
+        p, 0.01f, [&] { return bound; },
+        [&](int t) {
+          ++visits;
+          const float d = distanceSquared(t, p);
+          if (d < bound || (d == bound && t < best)) bound = d, best = t;
+        });
+    int brute = 0;
+    for (int t = 1; t < triangles; ++t)
+      if (distanceSquared(t, p) < distanceSquared(brute, p)) brute = t;
+    EXPECT_EQ(best, brute) << "near triangle " << near;
+    EXPECT_LT(visits, triangles / 4) << "near triangle " << near;
+  }
 }
 
 // Contact look-ups whose reach spans a whole obstacle (fast particles, long sub-steps, a giant

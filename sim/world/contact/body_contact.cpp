@@ -97,17 +97,16 @@ bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle,
     // The grid and its triangle boxes are from positions up to `drift` old: look that much
     // further, and a box may be that much closer than its triangle is now.
     float bound = drift > 0.0f ? (reach + drift) * (reach + drift) : best.distanceSquared;
-    if (!grid.empty())
-      grid.forEachCell(p, extra + drift, [&](const SurfaceGrid::Range& range) {
-        for (const int* t = range.begin; t != range.end; ++t) {
-          if (grid.boxDistanceSquared(*t, p) > bound) continue;  // cannot be closer
+    // Triangles whose boxes are farther than `bound` cannot be closer.
+    grid.forEachNear(
+        p, extra + drift, [&] { return bound; },
+        [&](int t) {
           ++tests;
-          if (consider(obstacle, p, *t, best)) {
+          if (consider(obstacle, p, t, best)) {
             const float d = std::sqrt(best.distanceSquared);
             bound = drift > 0.0f ? (d + drift) * (d + drift) : best.distanceSquared;
           }
-        }
-      });
+        });
     bool deepHit = false;
     if (best.triangle < 0) {
       if (!inBox) continue;

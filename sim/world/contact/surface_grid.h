@@ -35,14 +35,18 @@ class SurfaceGrid {
   };
   Range candidates(const Vec3f& p) const;
 
-  // Calls visit(range) for every cell that overlaps the box p ± extra (extra ≥ 0, metres): together
-  // they hold every triangle within reach() + extra of p (a triangle may come up more than once).
-  // When that box spans more than maxCellsPerLookup cells (a fast particle, a long sub-step), it
-  // visits the list of all gridded triangles once instead: a look-up never costs more than
-  // max(maxCellsPerLookup cells, one pass over the triangles), whatever the speeds. An empty
-  // grid (no triangle near the region) visits nothing.
-  template <typename Visit>
-  void forEachCell(const Vec3f& p, float extra, const Visit& visit) const;
+  // Calls visit(t) for the triangles t that may lie within reach() + extra of p (extra ≥ 0,
+  // metres) and whose build-time box is within sqrt(bound()) of p; bound() (m²) is read again
+  // after each visit, so a search for the closest triangle can lower it as it goes. A triangle
+  // may come up more than once. Looks at the cells that overlap p ± extra; when those are more
+  // than maxCellsPerLookup (a fast particle, a long sub-step), it searches every triangle's box
+  // nearest first in the box tree instead (without a tree — a non-finite position — it passes
+  // over the gridded triangles once): a look-up never costs more than maxCellsPerLookup cells or
+  // one visit per triangle within the bound, whatever the speeds. (It passed over every gridded
+  // triangle there, and a soak whose drags and gravity changes made particles fast spent 500 ms
+  // per step on those passes.) An empty grid (no triangle near the region) visits nothing.
+  template <typename Bound, typename Visit>
+  void forEachNear(const Vec3f& p, float extra, const Bound& bound, const Visit& visit) const;
 
   // Squared distance (m²) from p to the bounding box of triangle t at build time: a lower
   // bound on its distance to the triangle, to skip triangles without the exact test.
@@ -58,6 +62,7 @@ class SurfaceGrid {
 
   static constexpr int maxCellsPerAxis = 48;
   static constexpr long long maxCellsPerLookup = 64;
+  static constexpr long long maxEntriesPerLookup = 96;
   bool empty() const { return allTriangles_.empty(); }
 
  private:
@@ -76,27 +81,48 @@ class SurfaceGrid {
   Eigen::Vector3i cellOf(const Vec3f& p) const;
 };
 
-template <typename Visit>
-void SurfaceGrid::forEachCell(const Vec3f& p, float extra, const Visit& visit) const {
+template <typename Bound, typename Visit>
+void SurfaceGrid::forEachNear(const Vec3f& p, float extra, const Bound& bound,
+                              const Visit& visit) const {
   if (allTriangles_.empty()) return;  // also: bounds_ is empty, cellOf has no cell to clamp to
+  auto visitRange = [&](const int* begin, const int* end) {
+    for (const int* t = begin; t != end; ++t)
+      if (!(boxDistanceSquared(*t, p) > bound())) visit(*t);
+  };
   if (extra <= 0.0f) {
     const Range r = candidates(p);
-    if (r.begin != r.end) visit(r);
+    visitRange(r.begin, r.end);
     return;
   }
   const Eigen::AlignedBox3f box(p.array() - extra, p.array() + extra);
   if (!box.intersects(bounds_)) return;
   const Eigen::Vector3i lo = cellOf(box.min()), hi = cellOf(box.max());
   const Eigen::Vector3i span = hi - lo + Eigen::Vector3i::Ones();
-  if (1LL * span.x() * span.y() * span.z() > maxCellsPerLookup) {
-    visit(Range{allTriangles_.data(), allTriangles_.data() + allTriangles_.size()});
+  // Entries in those cells, most of them to be rejected by their boxes: a crumpled or folded
+  // surface can pack hundreds of triangles into one cell, and the tree then rejects them by the
+  // dozen.
+  long long entries = maxEntriesPerLookup + 1;
+  if (1LL * span.x() * span.y() * span.z() <= maxCellsPerLookup) {
+    entries = 0;
+    for (int k = lo.z(); k <= hi.z(); ++k)
+      for (int j = lo.y(); j <= hi.y(); ++j)
+        entries += cells_.start[size_t(cellIndex(hi.x(), j, k)) + 1] -
+                   cells_.start[size_t(cellIndex(lo.x(), j, k))];
+  }
+  if (entries > maxEntriesPerLookup) {
+    if (boxTree_.empty())
+      visitRange(allTriangles_.data(), allTriangles_.data() + allTriangles_.size());
+    else
+      boxTree_.visitNear(p, bound, [&](int t) {
+        if (!(boxDistanceSquared(t, p) > bound())) visit(t);
+      });
     return;
   }
   for (int k = lo.z(); k <= hi.z(); ++k)
     for (int j = lo.y(); j <= hi.y(); ++j)
       for (int i = lo.x(); i <= hi.x(); ++i) {
         const int c = cellIndex(i, j, k);
-        if (cells_.size(c) != 0) visit(Range{cells_.begin(c), cells_.end(c)});
+        visitRange(cells_.begin(c), cells_.end(c));
       }
 }
 
