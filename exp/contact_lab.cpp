@@ -636,8 +636,7 @@ int overlap() {
   BodyDef b = makeBody(s, Vec3(0.5 * L - 0.5 * depth * L, y, 0), Mat3::Identity(),
                        str("mode", "rigid"), num("alpha", 1), 0.3, num("damping", 0), 1);
   std::vector<Shape> shapes{s, s};
-  w.addBody(a);
-  w.addBody(b);
+  const BodyHandle ha = w.addBody(a), hb = w.addBody(b);
   const int steps = stepsFor(w, T);
   double peak = 0, sepTime = -1;
   for (int k = 1; k <= steps; ++k) {
@@ -647,8 +646,9 @@ int overlap() {
   }
   std::printf(
       "separated (depth < 1%% spacing) at %.3f s, peak speed %.3g m/s, final max speed %.3g, "
-      "deepest %.3g spacings\n",
-      sepTime, peak, maxSpeed(w), deepestPenetration(w, shapes, nullptr));
+      "deepest %.3g spacings, centres %.3g L apart\n",
+      sepTime, peak, maxSpeed(w), deepestPenetration(w, shapes, nullptr),
+      (w.centreOfMass(ha) - w.centreOfMass(hb)).norm() / L);
   return 0;
 }
 

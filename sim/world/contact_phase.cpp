@@ -60,6 +60,7 @@ void prepareGeometry(const BodySlot& b, float h, ContactScratch::Body& cs) {
   g.box = detectionBox(cs);
   g.gap = kContactGap * m.spacing;
   g.margin = kContactMargin * m.spacing;
+  g.slop = kContactSlop * m.spacing;
   g.meanVelocity = cs.meanVelocity + cs.frameShift / h;
   g.maxRelativeSpeed = cs.maxRelativeSpeed;
 }
@@ -463,9 +464,17 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
                                         std::make_pair(p.probe, p.obstacle));
     const ContactScratch::Body& probe = contactScratch[size_t(p.probe)];
     const ContactScratch::Body& obstacle = contactScratch[size_t(p.obstacle)];
+    // The way out of an obstacle the probe overlaps by more than half: away from its centre, or,
+    // for bodies that coincide, up for the body in the lower slot and down for the other.
+    Vec3f apart = probe.geometry.box.center() - obstacle.geometry.box.center();
+    const float size = probe.geometry.box.sizes().norm() + obstacle.geometry.box.sizes().norm();
+    if (apart.norm() > 1e-4f * size)
+      apart.normalize();
+    else
+      apart = Vec3f(0, p.probe < p.obstacle ? 1.0f : -1.0f, 0);
     std::vector<Contact>& found = pairContacts[size_t(k)];
     scratch.pairDeep[size_t(k)] = findContacts(probe.geometry, obstacle.geometry, float(h), deep,
-                                               found, &scratch.pairTests[size_t(k)]);
+                                               apart, found, &scratch.pairTests[size_t(k)]);
     // Distances found in the detection's frame, carried back to the actual positions (the
     // solver's start). One side at most is shifted, all of it by the same vector.
     const Vec3f shift = probe.frameShift - obstacle.frameShift;

@@ -517,6 +517,46 @@ TEST(Contact, StackSettlesWithoutJitter) {
   }
 }
 
+// Two 0.5 m cubes (4×4 quads a face) start overlapping by 60 %, 90 % and 100 % (coincident) of
+// their edge on the floor, sleep off, 4 s, rigid and soft. Each particle was pushed out through
+// its closest face, which for bodies more than halfway into each other is on the far side: the
+// cubes pulled each other in and ended coincident (centres 0.3 % of the edge apart), a state
+// their contacts then held, each particle lying on the other's surface — in the soak, bunnies so
+// merged moved as one and drove others into the same state. They must come apart: centres at
+// least 0.95 of the edge apart (side by side or one on the other), nothing inside the other,
+// and no energy from the separation: the fastest particle ever below 1 m/s (the push-out moves
+// positions at a bounded rate without velocity; measured at most 0.43 m/s) and still at the end.
+TEST(Contact, BodiesOverlappingByMoreThanHalfComeApart) {
+  World world = floorWorld();
+  WorldSettings awake = world.settings();
+  awake.sleep = false;
+  world.setSettings(awake);
+  const double edge = 0.5;
+  for (double overlap : {0.6, 0.9, 1.0})
+    for (Mode mode : {Mode::Rigid, Mode::Linear}) {
+      SCOPED_TRACE(std::string(modeName(mode)) + " overlapping " + std::to_string(overlap));
+      World w = world;
+      const double offset = 0.5 * edge * (1.0 - overlap);
+      const Shape a = onFloorAt(cubeSurface(edge, 4, Vec3(-offset, 0, 0)), 0.001);
+      const Shape b = onFloorAt(cubeSurface(edge, 4, Vec3(offset, 0, 0)), 0.001);
+      const double alpha = mode == Mode::Rigid ? 1.0 : 0.5;
+      const BodyHandle ha = w.addBody(bodyFrom(a, "a", mode, alpha));
+      const BodyHandle hb = w.addBody(bodyFrom(b, "b", mode, alpha));
+      double fastest = 0;
+      for (int step = 0; step < 240; ++step) {
+        w.step();
+        for (BodyHandle h : {ha, hb})
+          fastest = std::max(fastest, double(w.velocities(h).rowwise().norm().maxCoeff()));
+      }
+      EXPECT_GE((w.centreOfMass(ha) - w.centreOfMass(hb)).norm(), 0.95 * edge);
+      const double spacing = mesh::meanEdgeLength(a.triangles, a.points);
+      EXPECT_LT(deepestInside(w, ha, hb, b.triangles), 0.05 * spacing);
+      EXPECT_LT(deepestInside(w, hb, ha, a.triangles), 0.05 * spacing);
+      EXPECT_LT(fastest, 1.0);
+      for (BodyHandle h : {ha, hb}) EXPECT_LT(w.velocities(h).rowwise().norm().maxCoeff(), 0.01);
+    }
+}
+
 // Ten rigid 0.4 m cubes, each turned 7° about the vertical from the one below, stacked 1.5 mm
 // apart on the floor, sleep off, 5 s. The position recovery used to push out every round-off
 // residue of the resting contacts; each push turned a box a little about its centre and slid its

@@ -61,11 +61,69 @@ bool consider(const ContactGeometry& obstacle, const Vec3f& p, int t, Closest& b
   return false;
 }
 
+// The closest triangle of the whole surface to p (nearest, ties to the lower index): triangles
+// whose (build-time) boxes are farther than the best so far plus the grid's drift cannot be
+// closer (as in the grid look-up). The boxes come in a hierarchy, nearer subtrees first, so most
+// of the surface goes for a few node tests; without a tree (an empty grid, or a non-finite
+// position) every triangle is tried. best.triangle < 0 when the surface has none.
+void closestOnSurface(const ContactGeometry& obstacle, const Vec3f& p, Closest& best, long& tests) {
+  const SurfaceGrid& grid = *obstacle.grid;
+  const float drift = obstacle.gridDrift;
+  best.triangle = -1;
+  best.distanceSquared = std::numeric_limits<float>::infinity();
+  float bound = best.distanceSquared;
+  auto take = [&](int t) {
+    ++tests;
+    if (consider(obstacle, p, t, best)) {
+      const float d = std::sqrt(best.distanceSquared);
+      bound = drift > 0.0f ? (d + drift) * (d + drift) : best.distanceSquared;
+    }
+  };
+  if (!grid.boxTree().empty()) {
+    grid.boxTree().visitNear(
+        p, [&] { return bound; },
+        [&](int t) {
+          if (!(grid.boxDistanceSquared(t, p) > bound)) take(t);
+        });
+  } else {
+    const bool haveBoxes = !grid.empty();
+    for (int t = 0; t < int(obstacle.triangles->size()); ++t)
+      if (!haveBoxes || !(grid.boxDistanceSquared(t, p) > bound)) take(t);
+  }
+}
+
+// Whether p is inside the obstacle's closed surface (by the pseudo-normal of its closest
+// feature).
+bool insideSurface(const ContactGeometry& obstacle, const Vec3f& p, long& tests) {
+  Closest best;
+  closestOnSurface(obstacle, p, best, tests);
+  if (best.triangle < 0) return false;
+  const Vec3f side =
+      mesh::pseudoNormal(*obstacle.triangles, *obstacle.topology, obstacle.x[0], obstacle.x[1],
+                         obstacle.x[2], best.triangle, best.point.feature);
+  return (p - best.position).dot(side) < 0.0f;
+}
+
 }  // namespace
 
 bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle, float h, bool deep,
-                  std::vector<Contact>& out, long* triangleTests) {
+                  const Vec3f& apart, std::vector<Contact>& out, long* triangleTests) {
   long tests = 0;
+  // Bodies more than halfway into each other (each one's box centre within the other's box, the
+  // probe's inside the obstacle): pushed through by others, dragged or spawned into each other.
+  // There a particle's closest face can be on the obstacle's far side, and pushing particles out
+  // through their closest faces pulled such bodies together until they coincided — a state
+  // every contact holds, each particle lying on the other's surface (two cubes overlapping by
+  // 60 % merged within a second; bunnies in the soak moved as one). In such a pair every inside
+  // particle is held along `apart`: none pulls the bodies together, and the deepest one along
+  // `apart` pushes them apart (by its depth to the obstacle's far extent, rate-bounded by the
+  // solver's position sweeps).
+  const Vec3f probeCentre = probe.box.center();
+  const bool overlapping = deep && probe.box.contains(obstacle.box.center()) &&
+                           obstacle.box.contains(probeCentre) &&
+                           insideSurface(obstacle, probeCentre, tests);
+  int deepestAlong = -1;
+  float deepestDistance = 0;
   const std::vector<mesh::Triangle>& tris = *obstacle.triangles;
   const SurfaceGrid& grid = *obstacle.grid;
   bool foundDeep = false;
@@ -113,31 +171,7 @@ bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle,
       // Nothing in reach, inside the obstacle's box: the closest triangle of the whole surface,
       // kept only if the particle is inside (a particle deeper than one sub-step's travel: an
       // overlapping start or a drag into the body).
-      // Triangles whose (build-time) boxes are farther than the best so far plus the grid's
-      // drift cannot be closer (as in the grid lookup above). The boxes come in a hierarchy,
-      // nearer subtrees first, so most of the surface goes for a few node tests; the result is
-      // that of a pass over every triangle (the closest, ties to the lower index, whatever the
-      // order). Without a tree (an empty grid, or a non-finite position) every triangle is tried.
-      best.distanceSquared = std::numeric_limits<float>::infinity();
-      float deepBound = best.distanceSquared;
-      auto take = [&](int t) {
-        ++tests;
-        if (consider(obstacle, p, t, best)) {
-          const float d = std::sqrt(best.distanceSquared);
-          deepBound = drift > 0.0f ? (d + drift) * (d + drift) : best.distanceSquared;
-        }
-      };
-      if (!grid.boxTree().empty()) {
-        grid.boxTree().visitNear(
-            p, [&] { return deepBound; },
-            [&](int t) {
-              if (!(grid.boxDistanceSquared(t, p) > deepBound)) take(t);
-            });
-      } else {
-        const bool haveBoxes = !grid.empty();
-        for (int t = 0; t < int(tris.size()); ++t)
-          if (!haveBoxes || !(grid.boxDistanceSquared(t, p) > deepBound)) take(t);
-      }
+      closestOnSurface(obstacle, p, best, tests);
       if (best.triangle < 0) continue;
       deepHit = true;
     }
@@ -151,6 +185,17 @@ bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle,
       foundDeep = true;
     }
     if (!inside && distance >= touch + extra) continue;
+    if (overlapping && inside) {
+      // No deeper than the slop: stopped along `apart`, not pushed (the deepest one does that).
+      const float along = p.dot(apart);
+      if (deepestAlong < 0 || along < deepestDistance) {
+        deepestAlong = int(out.size());
+        deepestDistance = along;
+      }
+      out.push_back(
+          {i, best.triangle, best.point.weights, apart, std::max(-distance, -probe.slop)});
+      continue;
+    }
 
     // Which corner's fan to consider too: the feature's corner, or none.
     const int feature = int(best.point.feature);
@@ -214,8 +259,14 @@ bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle,
     }
     out.push_back({i, best.triangle, best.point.weights, normal, inside ? -distance : distance});
   }
+  if (deepestAlong >= 0) {
+    float extent = -std::numeric_limits<float>::infinity();
+    for (int v = 0; v < obstacle.count; ++v)
+      extent = std::max(extent, obstacle.position(v).dot(apart));
+    out[size_t(deepestAlong)].distance = deepestDistance - extent;
+  }
   if (triangleTests) *triangleTests += tests;
-  return foundDeep;
+  return foundDeep || overlapping;
 }
 
 }  // namespace sb

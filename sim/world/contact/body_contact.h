@@ -35,6 +35,8 @@ struct ContactGeometry {
   // reach): the solver lets them approach only until they touch (speculative contact), so a
   // resting particle keeps its contact and a fast one is stopped at the surface.
   float margin = 0;
+  // Metres ≥ 0: penetration the solver's position recovery leaves alone, when this body probes.
+  float slop = 0;
   Vec3f meanVelocity = Vec3f::Zero();  // m/s: velocity of the centre of mass this sub-step
   float maxRelativeSpeed = 0;          // m/s: fastest particle relative to meanVelocity
 
@@ -70,7 +72,14 @@ struct Contact {
 // triangle in reach (overlapping starts, fast drags); returns whether it found any inside.
 // triangleTests, when given, grows by the number of point–triangle tests made: at most two per
 // particle and triangle (the grid's look-up visits a triangle once, the deep search once).
+//
+// apart: unit direction in which the probe leaves the obstacle when the two overlap by more than
+// half (each body's box centre inside the other's box and the probe's inside the obstacle): then
+// every inside particle is held along it instead of its closest face (which may be on the far
+// side, pulling the bodies together), the deepest one along it with its depth to the obstacle's
+// far extent. Checked on deep searches only; a pair found overlapping returns true, so it is
+// searched every sub-step until it no longer is.
 bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle, float h, bool deep,
-                  std::vector<Contact>& out, long* triangleTests = nullptr);
+                  const Vec3f& apart, std::vector<Contact>& out, long* triangleTests = nullptr);
 
 }  // namespace sb
