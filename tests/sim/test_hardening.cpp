@@ -225,59 +225,80 @@ TEST_F(HardeningFiles, ScenePathsThatAreNotRegularFiles) {
 // ---------------------------------------------------------------------------------------------
 // 11. Work per step bounded by the scene's size, not its speeds
 
+// The bunny cage (units of ~10 across) gridded with the given reach and cell size over
+// [−10, 10]³, with the two closest-triangle searches the contacts could make: the grid's (the
+// bound lowered as it goes) and a pass over all triangles.
+struct GriddedCage {
+  mesh::TriangleMesh cage = mesh::readMesh(kAssets + "/meshes/bunny_cage.obj");
+  std::vector<float> x, y, z;
+  SurfaceGrid grid;
+  int triangles = int(cage.triangles.size());
+
+  GriddedCage(float reach, float cellSize) {
+    for (const Vec3& v : cage.vertices) {
+      x.push_back(float(v.x()));
+      y.push_back(float(v.y()));
+      z.push_back(float(v.z()));
+    }
+    grid.build(cage.triangles, x.data(), y.data(), z.data(), reach, cellSize,
+               Eigen::AlignedBox3f(Vec3f::Constant(-10), Vec3f::Constant(10)));
+  }
+  Vec3f point(int v) const { return Vec3f(x[size_t(v)], y[size_t(v)], z[size_t(v)]); }
+  Vec3f centroid(int t) const {
+    const mesh::Triangle& f = cage.triangles[size_t(t)];
+    return (point(f[0]) + point(f[1]) + point(f[2])) / 3.0f;
+  }
+  float distanceSquared(int t, const Vec3f& p) const {
+    const mesh::Triangle& f = cage.triangles[size_t(t)];
+    const Vec3f a = point(f[0]), b = point(f[1]), c = point(f[2]);
+    const mesh::TrianglePoint<float> q = mesh::closestPointOnTriangle(p, a, b, c);
+    return (p - (q.weights[0] * a + q.weights[1] * b + q.weights[2] * c)).squaredNorm();
+  }
+  // The grid's search from bound² down; *visits counts the triangles it tested.
+  int searched(const Vec3f& p, float extra, float bound, int* visits) const {
+    int best = -1;
+    grid.forEachNear(
+        p, extra, [&] { return bound; },
+        [&](int t) {
+          ++*visits;
+          const float d = distanceSquared(t, p);
+          if (d < bound || (d == bound && t < best)) bound = d, best = t;
+        });
+    return best;
+  }
+  int byPass(const Vec3f& p) const {
+    int best = 0;
+    for (int t = 1; t < triangles; ++t)
+      if (distanceSquared(t, p) < distanceSquared(best, p)) best = t;
+    return best;
+  }
+};
+
 TEST(Hardening, LookupsOfFastParticlesVisitEachTriangleOnce) {
   // A sphere-like surface, gridded over a wide region; a particle asking with a huge reach
   // (a fast particle, a long sub-step) gets each triangle within its bound once, not up to 48³
   // cells' worth, and the closest triangle comes out as a pass over every triangle finds it.
-  const mesh::TriangleMesh cage = mesh::readMesh(kAssets + "/meshes/bunny_cage.obj");
-  std::vector<float> x, y, z;
-  for (const Vec3& v : cage.vertices) {
-    x.push_back(float(v.x()));
-    y.push_back(float(v.y()));
-    z.push_back(float(v.z()));
-  }
-  SurfaceGrid grid;
-  grid.build(cage.triangles, x.data(), y.data(), z.data(), 0.01f, 0.005f,
-             Eigen::AlignedBox3f(Vec3f::Constant(-10), Vec3f::Constant(10)));
-  const int triangles = int(cage.triangles.size());
-  auto pointOf = [&](int v) { return Vec3f(x[size_t(v)], y[size_t(v)], z[size_t(v)]); };
-  auto distanceSquared = [&](int t, const Vec3f& p) {
-    const mesh::Triangle& f = cage.triangles[size_t(t)];
-    const Vec3f a = pointOf(f[0]), b = pointOf(f[1]), c = pointOf(f[2]);
-    const mesh::TrianglePoint<float> q = mesh::closestPointOnTriangle(p, a, b, c);
-    return (p - (q.weights[0] * a + q.weights[1] * b + q.weights[2] * c)).squaredNorm();
-  };
+  const GriddedCage g(0.01f, 0.005f);
   for (float extra : {10.0f, 1e4f, 1e30f}) {
     // Unbounded: every triangle, once each.
-    std::vector<int> seen(size_t(triangles), 0);
-    grid.forEachNear(
+    std::vector<int> seen(size_t(g.triangles), 0);
+    g.grid.forEachNear(
         Vec3f(0, 0, 0), extra, [] { return INFINITY; }, [&](int t) { ++seen[size_t(t)]; });
-    EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), triangles) << extra;
-    // The closest-triangle search of the contacts, the bound lowered as it goes, against a pass
-    // over all triangles, from points around and inside the surface.
+    EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), g.triangles) << extra;
+    // From points around and inside the surface.
     for (const Vec3f& p : {Vec3f(0, 0, 0), Vec3f(0.3f, -0.2f, 0.1f), Vec3f(-2, 1, 0.5f),
                            Vec3f(0.05f, 0.4f, -0.3f)}) {
-      int best = -1, visits = 0;
-      float bound = INFINITY;
-      grid.forEachNear(
-          p, extra, [&] { return bound; },
-          [&](int t) {
-            ++visits;
-            const float d = distanceSquared(t, p);
-            if (d < bound || (d == bound && t < best)) bound = d, best = t;
-          });
-      int brute = 0;
-      for (int t = 1; t < triangles; ++t)
-        if (distanceSquared(t, p) < distanceSquared(brute, p)) brute = t;
-      EXPECT_EQ(best, brute) << extra << " at " << p.transpose();
-      EXPECT_LT(visits, triangles / 4) << "the bound prunes most of the surface";
+      int visits = 0;
+      EXPECT_EQ(g.searched(p, extra, INFINITY, &visits), g.byPass(p))
+          << extra << " at " << p.transpose();
+      EXPECT_LT(visits, g.triangles / 4) << "the bound prunes most of the surface";
     }
   }
   // A slow particle still asks a few cells only: the triangles in them, each box within reach.
   int visits = 0;
-  grid.forEachNear(
+  g.grid.forEachNear(
       Vec3f(0, 0, 0), 1e-4f, [] { return 0.0101f * 0.0101f; }, [&](int) { ++visits; });
-  EXPECT_LE(visits, triangles / 4);
+  EXPECT_LE(visits, g.triangles / 4);
 }
 
 TEST(Hardening, LookupsInACrumpledSurfaceFindTheClosestTriangle) {
@@ -285,44 +306,15 @@ TEST(Hardening, LookupsInACrumpledSurfaceFindTheClosestTriangle) {
   // a slow particle's look-up met every triangle of the cell, each rejected by its box (a soak
   // spent 550 ms per step so). With more entries than maxEntriesPerLookup the box tree answers
   // instead; the closest triangle must still be the one a pass over all triangles finds.
-  const mesh::TriangleMesh cage = mesh::readMesh(kAssets + "/meshes/bunny_cage.obj");
-  std::vector<float> x, y, z;
-  for (const Vec3& v : cage.vertices) {
-    x.push_back(float(v.x()));
-    y.push_back(float(v.y()));
-    z.push_back(float(v.z()));
-  }
-  const int triangles = int(cage.triangles.size());
-  SurfaceGrid grid;
-  grid.build(cage.triangles, x.data(), y.data(), z.data(), 0.01f, 20.0f,
-             Eigen::AlignedBox3f(Vec3f::Constant(-10), Vec3f::Constant(10)));
-  ASSERT_EQ(grid.candidates(Vec3f(0, 0, 0)).end - grid.candidates(Vec3f(0, 0, 0)).begin, triangles);
-  ASSERT_GT(triangles, SurfaceGrid::maxEntriesPerLookup);
-  auto pointOf = [&](int v) { return Vec3f(x[size_t(v)], y[size_t(v)], z[size_t(v)]); };
-  auto distanceSquared = [&](int t, const Vec3f& p) {
-    const mesh::Triangle& f = cage.triangles[size_t(t)];
-    const Vec3f a = pointOf(f[0]), b = pointOf(f[1]), c = pointOf(f[2]);
-    const mesh::TrianglePoint<float> q = mesh::closestPointOnTriangle(p, a, b, c);
-    return (p - (q.weights[0] * a + q.weights[1] * b + q.weights[2] * c)).squaredNorm();
-  };
-  for (int near = 0; near < triangles; near += 7) {
-    const mesh::Triangle& f = cage.triangles[size_t(near)];
-    const Vec3f p =
-        (pointOf(f[0]) + pointOf(f[1]) + pointOf(f[2])) / 3.0f + Vec3f(0.003f, -0.002f, 0.001f);
-    int best = -1, visits = 0;
-    float bound = 0.02f * 0.02f;
-    grid.forEachNear(
-        p, 0.01f, [&] { return bound; },
-        [&](int t) {
-          ++visits;
-          const float d = distanceSquared(t, p);
-          if (d < bound || (d == bound && t < best)) bound = d, best = t;
-        });
-    int brute = 0;
-    for (int t = 1; t < triangles; ++t)
-      if (distanceSquared(t, p) < distanceSquared(brute, p)) brute = t;
-    EXPECT_EQ(best, brute) << "near triangle " << near;
-    EXPECT_LT(visits, triangles / 4) << "near triangle " << near;
+  const GriddedCage g(0.01f, 20.0f);
+  const SurfaceGrid::Range all = g.grid.candidates(Vec3f(0, 0, 0));
+  ASSERT_EQ(all.end - all.begin, g.triangles);
+  ASSERT_GT(g.triangles, SurfaceGrid::maxEntriesPerLookup);
+  for (int near = 0; near < g.triangles; near += 7) {
+    const Vec3f p = g.centroid(near) + Vec3f(0.003f, -0.002f, 0.001f);
+    int visits = 0;
+    EXPECT_EQ(g.searched(p, 0.01f, 0.02f * 0.02f, &visits), g.byPass(p)) << "near " << near;
+    EXPECT_LT(visits, g.triangles / 4) << "near triangle " << near;
   }
 }
 
