@@ -113,9 +113,9 @@ SoakResult soak(int steps, unsigned seed, int warmUp, double alphaMin) {
       ws.gravity = Vec3(gx, gy, gz);
       ws.contactFriction = uniform(0, 1.5);
       // The whole documented range, from a stream of its own: one more draw from `rng` changes
-      // every later action, and the sequence that gave (with or without rolling resistance)
-      // drove the pile into 1,000–2,700 contacts per step from step 12,500, 40× slower
-      // (docs/design.md §5.5, still open); the soak keeps the sequence it has always run.
+      // every later action, and the soak keeps the sequence it has always run. (That other
+      // sequence once drove the pile into 1,000–2,700 contacts per step, 40× slower, most
+      // likely bodies merged into each other: docs/design.md §5.5; it now runs 1.5× as long.)
       ws.rollingResistance = std::uniform_real_distribution<double>(0, 1)(rollingRng);
       w.setSettings(ws);
     }
