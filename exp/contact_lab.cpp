@@ -1,6 +1,9 @@
 // contact_lab: reproducers and measurements for contacts, rest and sleep (issue 11). Not part of
-// the product: built only with -DSOFTBODY_BUILD_EXP=ON; see exp/README.md.
-// Usage: contact_lab SCENARIO [key=value ...]
+// the product: built only with -DSOFTBODY_BUILD_EXP=ON (exp/CMakeLists.txt).
+// Usage: contact_lab SCENARIO [key=value ...]; threads=N fixes the pool's thread count (runs are
+// bit-identical only for the same N). `scene path=FILE` also takes T= (seconds), sub=, sleep=0|1,
+// nodamp=1, every=, who=1, bodies=1 and spike=1 (after 4 s, every body's fastest particle in
+// each step where one moves ≥ 8 mm/s: which particle pops, and where).
 #include <Eigen/Dense>
 #include <array>
 #include <chrono>
@@ -11,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "sim/base/parallel.h"
 #include "sim/mesh/mesh_io.h"
 #include "sim/scene/scene.h"
 #include "sim/world/world.h"
@@ -698,6 +702,7 @@ int sceneRun() {
   const double T = num("T", 20);
   const int steps = stepsFor(w, T);
   double lastAwake = 0, peak = 0, peakLate = 0, lastImpact = 0, asleepAt = -1;
+  double lateSteps = 0, lateMoving = 0, lateSum = 0;  // the last 10 s
   const int every = std::max(1, int(num("every", steps / 10)));
   const int n = int(w.bodies().size());
   std::vector<double> prevVy(size_t(n), 0.0);
@@ -707,7 +712,22 @@ int sceneRun() {
     const double v = maxSpeed(w);
     peak = std::max(peak, v);
     if (w.time() > T - 5) peakLate = std::max(peakLate, v);
+    if (w.time() > T - 10) {
+      lateSteps += 1;
+      lateMoving += v >= 0.01 ? 1 : 0;
+      lateSum += v;
+    }
     if (v >= 0.01) lastAwake = w.time();
+    if (num("spike", 0) > 0 && w.time() > 4 && v > 0.008) {  // which particle jumps, and how
+      for (BodyHandle b : w.bodies()) {
+        int i = 0;
+        const double bv = w.velocities(b).rowwise().norm().maxCoeff(&i);
+        if (bv < 0.008) continue;
+        const Eigen::RowVector3f x = w.positions(b).row(i), u = w.velocities(b).row(i);
+        std::printf("spike %.4f %s particle %d v (%.4f %.4f %.4f) x (%.4f %.4f %.4f)\n", w.time(),
+                    w.name(b).c_str(), i, u.x(), u.y(), u.z(), x.x(), x.y(), x.z());
+      }
+    }
     // An impact: some body's centre velocity changed by more than 0.5 m/s in one step.
     const auto bs = w.bodies();
     for (int i = 0; i < n; ++i) {
@@ -749,8 +769,10 @@ int sceneRun() {
   }
   std::printf(
       "peak %.3g m/s; fastest in the last 5 s %.3g m/s; last time >= 1 cm/s: %.2f s; last impact "
-      "%.2f s; all asleep from %.2f s (of %.0f); CPU %.2f s\n",
-      peak, peakLate, lastAwake, lastImpact, asleepAt, T, cpuSeconds() - cpu0);
+      "%.2f s; all asleep from %.2f s (of %.0f); CPU %.2f s; last 10 s: mean fastest %.3g m/s, "
+      "%.0f steps >= 1 cm/s\n",
+      peak, peakLate, lastAwake, lastImpact, asleepAt, T, cpuSeconds() - cpu0,
+      lateSum / std::max(1.0, lateSteps), lateMoving);
   return 0;
 }
 
@@ -769,6 +791,7 @@ int main(int argc, char** argv) {
     if (eq != std::string::npos) opt[a.substr(0, eq)] = a.substr(eq + 1);
   }
   std::setvbuf(stdout, nullptr, _IOLBF, 0);
+  if (has("threads")) setThreadCount(int(num("threads", 1)));
   const std::string sc = argv[1];
   if (sc == "softrigid") return softRigid();
   if (sc == "pile") return pile();
