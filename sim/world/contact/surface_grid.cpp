@@ -34,10 +34,13 @@ void SurfaceGrid::build(const std::vector<mesh::Triangle>& triangles, const floa
 
   cellBoxes_.resize(triangles.size());
   triangleBoxes_.resize(triangles.size());
+  paddedBoxes_.resize(triangles.size());
   for (size_t t = 0; t < triangles.size(); ++t) {
     Eigen::AlignedBox3f box;
     for (int i : triangles[t]) box.extend(Vec3f(x[i], y[i], z[i]));
     triangleBoxes_[t] = box;
+    paddedBoxes_[t] = {Eigen::Array4f(box.min().x(), box.min().y(), box.min().z(), 0.0f),
+                       Eigen::Array4f(box.max().x(), box.max().y(), box.max().z(), 0.0f)};
     box.min().array() -= reach;
     box.max().array() += reach;
     cellBoxes_[t] = box.intersects(bounds_)
