@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace sb {
 
@@ -98,6 +99,35 @@ double colliderDistance(const Collider& c, const Vec3& p, Vec3* normal) {
   }
   *normal = Vec3::UnitY();
   return 1.0;
+}
+
+double colliderDistanceLowerBound(const Collider& c, const Eigen::AlignedBox3d& box) {
+  const double minusInf = -std::numeric_limits<double>::infinity();
+  // Distance from a point to the box (0 inside).
+  auto toBox = [&](const Vec3& q) {
+    return (box.min() - q).cwiseMax(q - box.max()).cwiseMax(0.0).norm();
+  };
+  switch (c.shape) {
+    case Collider::Shape::Plane: {  // the lowest corner along the normal
+      const Vec3 centre = box.center(), half = 0.5 * box.sizes();
+      return c.normal.dot(centre) - c.normal.cwiseAbs().dot(half) - c.offset;
+    }
+    case Collider::Shape::Sphere:  // positive only when every point is outside the sphere
+      return toBox(c.centre) - c.radius;
+    case Collider::Shape::Capsule:  // its bounding sphere
+      return toBox(c.centre) - c.axis.norm() - c.radius;
+    case Collider::Shape::Box: {
+      // The body's box in the collider's frame (a box around the rotated one), against the
+      // collider's: the gap between them along each local axis. A point outside the collider
+      // is as far as its local offset beyond the half extents, at least that gap.
+      const Vec3 centre = c.rotation.transpose() * (box.center() - c.centre);
+      const Vec3 half = c.rotation.transpose().cwiseAbs() * (0.5 * box.sizes());
+      const Vec3 gap = (centre.cwiseAbs() - half - c.halfExtents).cwiseMax(0.0);
+      const double g = gap.norm();
+      return g > 0.0 ? g : minusInf;
+    }
+  }
+  return minusInf;
 }
 
 }  // namespace sb

@@ -1,6 +1,7 @@
 // Static colliders that particles cannot enter, with Coulomb-style friction.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <string>
 
 #include "sim/base/types.h"
@@ -39,5 +40,11 @@ const char* colliderShapeName(Collider::Shape shape);
 // Signed distance from p to the collider surface (negative inside) and the outward surface
 // normal at the closest point. Pure function; used by the Collide phase and the tests.
 double colliderDistance(const Collider& collider, const Vec3& p, Vec3* normal);
+
+// A lower bound on colliderDistance(collider, p) over every p in `box` (metres, world frame),
+// exact for a plane, conservative (possibly −∞ or ≤ 0 when the box reaches into or around the
+// collider) otherwise: a body whose box is farther than its particles' reach from a collider
+// needs no per-particle test against it. A non-empty box with finite corners.
+double colliderDistanceLowerBound(const Collider& collider, const Eigen::AlignedBox3d& box);
 
 }  // namespace sb

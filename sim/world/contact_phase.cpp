@@ -323,13 +323,25 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
       ContactScratch::Body& cs = contactScratch[size_t(s)];
       const BodyState& st = slots[size_t(s)].state;
       const double margin = kContactMargin * slots[size_t(s)].model->spacing;
-      for (int p = 0; p < st.x.rows(); ++p) {
+      // Only the colliders the body's box comes within its fastest particle's reach of (in a
+      // walled pen most bodies are far from most walls: seed-scale.json).
+      if (st.x.rows() == 0) return;
+      const Eigen::AlignedBox3d box(st.x.colwise().minCoeff().transpose().cast<double>(),
+                                    st.x.colwise().maxCoeff().transpose().cast<double>());
+      const double farthest = margin + h * double(st.v.rowwise().norm().maxCoeff());
+      std::vector<int>& near = cs.nearColliders;
+      near.clear();
+      for (size_t c = 0; c < colliders.size(); ++c)
+        if (!box.sizes().allFinite() ||
+            !(colliderDistanceLowerBound(colliders[c], box) >= farthest))
+          near.push_back(int(c));
+      for (int p = 0; p < st.x.rows() && !near.empty(); ++p) {
         const Vec3 x = st.x.row(p).transpose().cast<double>();
         const double reach = margin + h * double(st.v.row(p).norm());
-        for (size_t c = 0; c < colliders.size(); ++c) {
+        for (int c : near) {
           Vec3 n;
-          const double d = colliderDistance(colliders[c], x, &n);
-          if (d < reach) cs.staticHits.push_back({p, int(c), float(d), n.cast<float>()});
+          const double d = colliderDistance(colliders[size_t(c)], x, &n);
+          if (d < reach) cs.staticHits.push_back({p, c, float(d), n.cast<float>()});
         }
       }
     });

@@ -71,6 +71,7 @@ struct ContactScratch {
     Eigen::AlignedBox3f gridRegion;
     const BodyModel* gridModel = nullptr;
     std::vector<StaticHit> staticHits;
+    std::vector<int> nearColliders;  // the colliders its particles are tested against, ascending
     // Where the body-body detection sees a sleeping body: moved by what gravity moves an awake
     // body in the sub-step's prediction (h²·g), with the velocity h·g that reaches it. An awake
     // body's particles are detected at their predicted positions; a sleeping body does not
