@@ -15,6 +15,7 @@
 
 #include "sim/base/file_io.h"
 #include "sim/base/parallel_for.h"
+#include "sim/cage/deform_kernels.h"
 #include "sim/cage/mvc.h"
 #include "sim/mesh/closed_surface.h"
 
@@ -170,9 +171,9 @@ void Embedding::deform(ConstPointsRef cagePositions, PointsRowMajor& out) const 
     throw std::invalid_argument("Embedding::deform: got " + std::to_string(cagePositions.rows()) +
                                 " cage positions, the embedding has " + std::to_string(cols_));
   out.resize(rows_, 3);
-  // Memory-bound: stream W once, row by row, against the cage coordinates as three contiguous
-  // float arrays (a few KB, in L1). Rows are independent: one range per thread
-  // (sim/base/parallel_for.h).
+  // W streams once, row by row, against the cage coordinates as three contiguous float arrays
+  // (a few KB, in L1): bound by the multiply-adds once W is in cache (deform_kernels.h). Rows
+  // are independent: one range of blocks per thread (sim/base/parallel_for.h).
   const int m = cols_;
   std::vector<float> cx(static_cast<std::size_t>(m)), cy(static_cast<std::size_t>(m)),
       cz(static_cast<std::size_t>(m));
@@ -181,51 +182,26 @@ void Embedding::deform(ConstPointsRef cagePositions, PointsRowMajor& out) const 
     cy[j] = cagePositions(j, 1);
     cz[j] = cagePositions(j, 2);
   }
-  const float* X = cx.data();
-  const float* Y = cy.data();
-  const float* Z = cz.data();
   float* o = out.data();
-  const int n = rows_;
+  const DeformIsa isa = deformKernelIsa();
+  // Blocks of 256 rows: the rows are independent, and a block amortises the call.
+  constexpr int kBlock = 256;
+  const int blocks = (rows_ + kBlock - 1) / kBlock;
   if (sparse_) {
-    // One 16-byte load per nonzero: cage positions as (x, y, z, 0) quadruples.
-    typedef float v4sf __attribute__((vector_size(16)));
-    std::vector<v4sf> c4(static_cast<std::size_t>(m));
-    for (int j = 0; j < m; ++j) c4[j] = v4sf{X[j], Y[j], Z[j], 0.0f};
-    const v4sf* C = c4.data();
-    const int* outer = sparseF_.outerIndexPtr();
-    const int* inner = sparseF_.innerIndexPtr();
-    const float* val = sparseF_.valuePtr();
-    parallelFor(n, 2001, [&](int i) {
-      // Four independent accumulators hide the add latency.
-      v4sf a0 = {0.0f, 0.0f, 0.0f, 0.0f}, a1 = a0, a2 = a0, a3 = a0;
-      int k = outer[i];
-      const int end = outer[i + 1];
-      for (; k + 4 <= end; k += 4) {
-        a0 += val[k] * C[inner[k]];
-        a1 += val[k + 1] * C[inner[k + 1]];
-        a2 += val[k + 2] * C[inner[k + 2]];
-        a3 += val[k + 3] * C[inner[k + 3]];
-      }
-      for (; k < end; ++k) a0 += val[k] * C[inner[k]];
-      const v4sf acc = (a0 + a1) + (a2 + a3);
-      o[3 * static_cast<std::size_t>(i)] = acc[0];
-      o[3 * static_cast<std::size_t>(i) + 1] = acc[1];
-      o[3 * static_cast<std::size_t>(i) + 2] = acc[2];
+    // One 16-byte load per nonzero: cage positions as (x, y, z, 0) quadruples (operator new
+    // aligns to 16 bytes).
+    static_assert(__STDCPP_DEFAULT_NEW_ALIGNMENT__ >= 16);
+    std::vector<float> c4(4 * static_cast<std::size_t>(m), 0.0f);
+    for (int j = 0; j < m; ++j)
+      for (int a = 0; a < 3; ++a) c4[4 * static_cast<std::size_t>(j) + a] = cagePositions(j, a);
+    parallelFor(blocks, 8, [&](int b) {
+      sparseDeformRows(sparseF_.outerIndexPtr(), sparseF_.innerIndexPtr(), sparseF_.valuePtr(),
+                       c4.data(), o, b * kBlock, std::min(rows_, (b + 1) * kBlock), isa);
     });
   } else {
-    const float* W = denseF_.data();
-    parallelFor(n, 2001, [&](int i) {
-      const float* w = W + static_cast<std::size_t>(i) * static_cast<std::size_t>(m);
-      float sx = 0.0f, sy = 0.0f, sz = 0.0f;
-#pragma omp simd reduction(+ : sx, sy, sz)
-      for (int j = 0; j < m; ++j) {
-        sx += w[j] * X[j];
-        sy += w[j] * Y[j];
-        sz += w[j] * Z[j];
-      }
-      o[3 * static_cast<std::size_t>(i)] = sx;
-      o[3 * static_cast<std::size_t>(i) + 1] = sy;
-      o[3 * static_cast<std::size_t>(i) + 2] = sz;
+    parallelFor(blocks, 8, [&](int b) {
+      denseDeformRows(denseF_.data(), m, cx.data(), cy.data(), cz.data(), o, b * kBlock,
+                      std::min(rows_, (b + 1) * kBlock), isa);
     });
   }
 }
