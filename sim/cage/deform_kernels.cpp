@@ -77,8 +77,8 @@ void denseDeformRows(const float* W, int m, const float* X, const float* Y, cons
     denseRows(W, m, X, Y, Z, out, begin, end);
 }
 
-void sparseDeformRows(const int* outer, const int* inner, const float* values,
-                      const float* cage4, float* out, int begin, int end, DeformIsa isa) {
+void sparseDeformRows(const int* outer, const int* inner, const float* values, const float* cage4,
+                      float* out, int begin, int end, DeformIsa isa) {
   if (isa == DeformIsa::Avx2Fma)
     sparseRowsWide(outer, inner, values, cage4, out, begin, end);
   else

@@ -20,7 +20,7 @@ void denseDeformRows(const float* W, int m, const float* X, const float* Y, cons
 
 // The same for a compressed row-major sparse W (outer: rows + 1 offsets into inner/values),
 // with the cage as (x, y, z, 0) quadruples: cage4[4j … 4j+3], 16-byte aligned.
-void sparseDeformRows(const int* outer, const int* inner, const float* values,
-                      const float* cage4, float* out, int begin, int end, DeformIsa isa);
+void sparseDeformRows(const int* outer, const int* inner, const float* values, const float* cage4,
+                      float* out, int begin, int end, DeformIsa isa);
 
 }  // namespace sb::cage
