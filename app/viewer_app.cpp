@@ -271,11 +271,16 @@ void ViewerApp::resetSimulation() {
 }
 
 void ViewerApp::updateMeshes() {
-  for (std::size_t i = 0; i < views_.size(); ++i) {
-    BodyView& v = views_[i];
-    if (!scene_.refreshRenderVertices(static_cast<int>(i), v.vertices, v.currentWhileAsleep)) {
-      continue;
+  std::vector<int> stale;
+  std::vector<PointsRowMajor*> outs;
+  for (std::size_t i = 0; i < views_.size(); ++i)
+    if (scene_.renderVerticesStale(static_cast<int>(i), views_[i].currentWhileAsleep)) {
+      stale.push_back(static_cast<int>(i));
+      outs.push_back(&views_[i].vertices);
     }
+  scene_.renderVertices(stale, outs);
+  for (const int i : stale) {
+    BodyView& v = views_[static_cast<std::size_t>(i)];
     v.uploaded = false;
     const auto n = static_cast<std::size_t>(v.vertices.rows());
     // The cage module's normals (area weighted, unit); a vertex no triangle uses gets +y so the

@@ -45,7 +45,7 @@ struct BodyView {
   bool embedded = false;  // render vertices come from the cage embedding (else = particles)
   glm::vec4 colour{1.0f};
   glm::vec3 boundsMin{0.0f}, boundsMax{0.0f};  // of this frame's vertices
-  // The vertices were deformed while the body slept (Scene::refreshRenderVertices): neither
+  // The vertices were deformed while the body slept (Scene::renderVerticesStale): neither
   // deform nor upload is redone until it wakes.
   bool currentWhileAsleep = false;
   bool uploaded = false;  // the GPU buffer holds these vertices and normals

@@ -167,43 +167,55 @@ std::int64_t Embedding::nonZeros() const {
 }
 
 void Embedding::deform(ConstPointsRef cagePositions, PointsRowMajor& out) const {
-  if (cagePositions.rows() != cols_)
-    throw std::invalid_argument("Embedding::deform: got " + std::to_string(cagePositions.rows()) +
-                                " cage positions, the embedding has " + std::to_string(cols_));
-  out.resize(rows_, 3);
-  // W streams once, row by row, against the cage coordinates as three contiguous float arrays
-  // (a few KB, in L1): bound by the multiply-adds once W is in cache (deform_kernels.h). Rows
-  // are independent: one range of blocks per thread (sim/base/parallel_for.h).
+  deformMany({cagePositions}, {&out});
+}
+
+void Embedding::deformMany(const std::vector<ConstPointsRef>& cages,
+                           const std::vector<PointsRowMajor*>& outs) const {
+  if (cages.size() != outs.size())
+    throw std::invalid_argument("Embedding::deformMany: " + std::to_string(cages.size()) +
+                                " cages but " + std::to_string(outs.size()) + " outputs");
+  for (const ConstPointsRef& cage : cages)
+    if (cage.rows() != cols_)
+      throw std::invalid_argument("Embedding::deform: got " + std::to_string(cage.rows()) +
+                                  " cage positions, the embedding has " + std::to_string(cols_));
   const int m = cols_;
-  std::vector<float> cx(static_cast<std::size_t>(m)), cy(static_cast<std::size_t>(m)),
-      cz(static_cast<std::size_t>(m));
-  for (int j = 0; j < m; ++j) {
-    cx[j] = cagePositions(j, 0);
-    cy[j] = cagePositions(j, 1);
-    cz[j] = cagePositions(j, 2);
+  const size_t count = cages.size();
+  // Each cage as three contiguous float arrays (dense) or (x, y, z, 0) quadruples (sparse: one
+  // 16-byte load per nonzero; operator new aligns to 16 bytes): a few KB each, in L1.
+  static_assert(__STDCPP_DEFAULT_NEW_ALIGNMENT__ >= 16);
+  const size_t stride = sparse_ ? 4 * size_t(m) : 3 * size_t(m);
+  std::vector<float> packed(count * stride, 0.0f);
+  for (size_t k = 0; k < count; ++k) {
+    float* c = packed.data() + k * stride;
+    for (int j = 0; j < m; ++j)
+      for (int a = 0; a < 3; ++a)
+        c[sparse_ ? 4 * size_t(j) + size_t(a) : size_t(a) * size_t(m) + size_t(j)] = cages[k](j, a);
+    outs[k]->resize(rows_, 3);
   }
-  float* o = out.data();
+  // W streams once, a block of rows at a time, against every cage: bound by the multiply-adds
+  // once the block is in cache (deform_kernels.h). Blocks are independent: one range of them
+  // per thread (sim/base/parallel_for.h); 256 rows of a 164-vertex cage are 168 KB.
   const DeformIsa isa = deformKernelIsa();
-  // Blocks of 256 rows: the rows are independent, and a block amortises the call.
+  // A W that fits in cache (a scene body's render mesh: 1.2 MB for the bunny) is taken four
+  // rows at a time, a larger one (streamed from memory) one row at a time: the faster way for
+  // each (deform_kernels.h). Chosen by W alone, so deform and deformMany agree bit for bit.
+  constexpr std::size_t kCachedWeightBytes = std::size_t(4) << 20;
+  const bool cached = std::size_t(rows_) * std::size_t(m) * sizeof(float) <= kCachedWeightBytes;
   constexpr int kBlock = 256;
   const int blocks = (rows_ + kBlock - 1) / kBlock;
-  if (sparse_) {
-    // One 16-byte load per nonzero: cage positions as (x, y, z, 0) quadruples (operator new
-    // aligns to 16 bytes).
-    static_assert(__STDCPP_DEFAULT_NEW_ALIGNMENT__ >= 16);
-    std::vector<float> c4(4 * static_cast<std::size_t>(m), 0.0f);
-    for (int j = 0; j < m; ++j)
-      for (int a = 0; a < 3; ++a) c4[4 * static_cast<std::size_t>(j) + a] = cagePositions(j, a);
-    parallelFor(blocks, 8, [&](int b) {
-      sparseDeformRows(sparseF_.outerIndexPtr(), sparseF_.innerIndexPtr(), sparseF_.valuePtr(),
-                       c4.data(), o, b * kBlock, std::min(rows_, (b + 1) * kBlock), isa);
-    });
-  } else {
-    parallelFor(blocks, 8, [&](int b) {
-      denseDeformRows(denseF_.data(), m, cx.data(), cy.data(), cz.data(), o, b * kBlock,
-                      std::min(rows_, (b + 1) * kBlock), isa);
-    });
-  }
+  parallelFor(blocks, count > 1 ? 2 : 8, [&](int b) {
+    const int begin = b * kBlock, end = std::min(rows_, begin + kBlock);
+    for (size_t k = 0; k < count; ++k) {
+      const float* c = packed.data() + k * stride;
+      float* o = outs[k]->data();
+      if (sparse_)
+        sparseDeformRows(sparseF_.outerIndexPtr(), sparseF_.innerIndexPtr(), sparseF_.valuePtr(), c,
+                         o, begin, end, isa);
+      else
+        denseDeformRows(denseF_.data(), m, c, c + m, c + 2 * size_t(m), o, begin, end, cached, isa);
+    }
+  });
 }
 
 void Embedding::deformDouble(const Eigen::Matrix<double, Eigen::Dynamic, 3>& cagePositions,

@@ -814,10 +814,35 @@ void Scene::renderVertices(int body, PointsRowMajor& out) const {
   }
 }
 
-bool Scene::refreshRenderVertices(int body, PointsRowMajor& out, bool& currentWhileAsleep) const {
+void Scene::renderVertices(const std::vector<int>& which,
+                           const std::vector<PointsRowMajor*>& outs) const {
+  // One group per binding, in order of first appearance.
+  struct Group {
+    const cage::Embedding* embedding;
+    std::vector<ConstPointsRef> cages;
+    std::vector<PointsRowMajor*> outs;
+  };
+  std::vector<Group> groups;
+  for (size_t k = 0; k < which.size(); ++k) {
+    const SceneBody& b = bodies.at(size_t(which[k]));
+    const ConstPointsRef particles = world.positions(b.handle);
+    if (!b.render) {
+      *outs.at(k) = particles;
+      continue;
+    }
+    const cage::Embedding* e = b.render->embedding.get();
+    auto g = std::find_if(groups.begin(), groups.end(),
+                          [&](const Group& group) { return group.embedding == e; });
+    if (g == groups.end()) g = groups.insert(groups.end(), Group{e, {}, {}});
+    g->cages.push_back(particles.topRows(b.cageVertexCount));
+    g->outs.push_back(outs.at(k));
+  }
+  for (const Group& g : groups) g.embedding->deformMany(g.cages, g.outs);
+}
+
+bool Scene::renderVerticesStale(int body, bool& currentWhileAsleep) const {
   const bool asleep = world.isSleeping(bodies.at(size_t(body)).handle);
   if (asleep && currentWhileAsleep) return false;
-  renderVertices(body, out);
   currentWhileAsleep = asleep;
   return true;
 }

@@ -81,11 +81,17 @@ struct Scene {
   // Current render-mesh vertices of body i (#V×3 rows): W · particle positions. Falls back to
   // the particle positions when the body has no render mesh.
   void renderVertices(int body, PointsRowMajor& out) const;
-  // renderVertices, skipped when `out` is already current: a sleeping body does not move
-  // (anything that moves it wakes it first), so its mesh, deformed once since it fell asleep,
-  // stays current and resting scenes cost no deform. `currentWhileAsleep` is the caller's record
-  // of that for this body and this `out` (false at first). Returns whether `out` was written.
-  bool refreshRenderVertices(int body, PointsRowMajor& out, bool& currentWhileAsleep) const;
+  // renderVertices for several bodies at once (outs[k] for bodies[k], all distinct): bodies
+  // whose render meshes share a binding are deformed together (cage::Embedding::deformMany:
+  // the weights stream once), each result bit-identical to renderVertices.
+  void renderVertices(const std::vector<int>& bodies,
+                      const std::vector<PointsRowMajor*>& outs) const;
+  // Whether body i's render vertices must be computed again, for a caller that keeps them: not
+  // when it sleeps and they were computed since it fell asleep (a sleeping body does not move;
+  // anything that moves it wakes it first), so resting scenes cost no deform.
+  // `currentWhileAsleep` is the caller's record of that for this body (false at first); it is
+  // updated as if the caller computes them when told to.
+  bool renderVerticesStale(int body, bool& currentWhileAsleep) const;
   // Triangles to draw for body i: the render mesh's, else the particle mesh's.
   const std::vector<std::array<int, 3>>& renderTriangles(int body) const;
 };

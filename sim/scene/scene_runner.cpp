@@ -2,8 +2,6 @@
 
 #include <chrono>
 
-#include "sim/base/parallel_for.h"
-
 namespace sb {
 
 SceneRunner::SceneRunner(Scene& scene, bool deform)
@@ -21,9 +19,14 @@ void SceneRunner::step(const std::function<void(const WorldEvent&)>& onEvent) {
   ++totals_.steps;
   if (deform_) {
     const auto t0 = std::chrono::steady_clock::now();
-    parallelFor(static_cast<int>(meshes_.size()), 2, [&](int i) {
-      scene_.refreshRenderVertices(i, meshes_[size_t(i)], currentWhileAsleep_[size_t(i)]);
-    });
+    std::vector<int> stale;
+    std::vector<PointsRowMajor*> outs;
+    for (size_t i = 0; i < meshes_.size(); ++i)
+      if (scene_.renderVerticesStale(int(i), currentWhileAsleep_[i])) {
+        stale.push_back(int(i));
+        outs.push_back(&meshes_[i]);
+      }
+    scene_.renderVertices(stale, outs);
     totals_.deformSeconds +=
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }

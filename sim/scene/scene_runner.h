@@ -39,7 +39,7 @@ class SceneRunner {
   bool deform_;
   RunTotals totals_;
   std::vector<PointsRowMajor> meshes_;
-  // Per body: its mesh was deformed while it slept (Scene::refreshRenderVertices).
+  // Per body: its mesh was deformed while it slept (Scene::renderVerticesStale).
   std::unique_ptr<bool[]> currentWhileAsleep_;
 };
 

@@ -71,15 +71,17 @@ void expectClose(const Case& k, const std::vector<float>& out, bool sparse, cons
   }
 }
 
-void checkIsa(DeformIsa isa, const char* what) {
-  // Odd sizes: vector remainders in the dense loop and the sparse loop's unrolled tail.
+void checkIsa(DeformIsa isa, bool cached, const char* what) {
+  // Odd sizes: vector remainders in the dense loop, rows left over from its fours (37 = 4·9 + 1,
+  // halves of 18 and 19), and the sparse loop's unrolled tail.
   for (const auto& [rows, m] : {std::pair{37, 164}, std::pair{300, 7}, std::pair{5, 1}}) {
     const Case k = makeCase(rows, m, unsigned(rows * 131 + m));
     std::vector<float> dense(3 * size_t(rows), NAN), sparse(3 * size_t(rows), NAN);
     // In two ranges, as the threads call it: each row written once, by its range.
     const int half = rows / 2;
     for (auto [b, e] : {std::pair{0, half}, std::pair{half, rows}}) {
-      denseDeformRows(k.W.data(), m, k.X.data(), k.Y.data(), k.Z.data(), dense.data(), b, e, isa);
+      denseDeformRows(k.W.data(), m, k.X.data(), k.Y.data(), k.Z.data(), dense.data(), b, e, cached,
+                      isa);
       sparseDeformRows(k.outer.data(), k.inner.data(), k.values.data(), k.cage4.data(),
                        sparse.data(), b, e, isa);
     }
@@ -89,12 +91,14 @@ void checkIsa(DeformIsa isa, const char* what) {
 }
 
 TEST(DeformKernels, BaselineMatchesDoubleSums) {
-  checkIsa(DeformIsa::Baseline, "baseline");
+  checkIsa(DeformIsa::Baseline, false, "baseline, one row at a time");
+  checkIsa(DeformIsa::Baseline, true, "baseline, four rows at a time");
 }
 
 TEST(DeformKernels, WideMatchesDoubleSums) {
   if (deformKernelIsa() != DeformIsa::Avx2Fma) GTEST_SKIP() << "this CPU has no AVX2 + FMA";
-  checkIsa(DeformIsa::Avx2Fma, "AVX2 + FMA");
+  checkIsa(DeformIsa::Avx2Fma, false, "AVX2 + FMA, one row at a time");
+  checkIsa(DeformIsa::Avx2Fma, true, "AVX2 + FMA, four rows at a time");
 }
 
 }  // namespace
