@@ -4,11 +4,13 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <vector>
 
 #include "app/commands.h"
 #include "sim/base/parallel.h"
 #include "sim/scene/frame_export.h"
+#include "sim/scene/point_cache.h"
 #include "sim/scene/scene.h"
 #include "sim/scene/scene_runner.h"
 #include "sim/world/param_ranges.h"
@@ -101,6 +103,7 @@ int runHeadlessCommand(int argc, char** argv) {
   int substeps = 0;
   double maxSubstep = 0;
   std::string exportDir;
+  std::string pc2Path, mddPath, restMeshPath, meshDir;
   int every = 1;
   std::string format = "obj";
   int threads = 0;
@@ -119,6 +122,16 @@ int runHeadlessCommand(int argc, char** argv) {
                  "scene's world.maxSubstep, default 1/120)")
       ->check(inRange(limits::maxSubstep));
   cli.add_option("--export", exportDir, "Write a frame file per exported step into this folder");
+  cli.add_option("--export-pc2", pc2Path,
+                 "Write the render meshes' vertices at the initial state and every K-th step as "
+                 "one PC2 point cache (all bodies, in scene order; see --export-mesh)");
+  cli.add_option("--export-mdd", mddPath, "The same as an MDD point cache");
+  cli.add_option("--export-mesh", restMeshPath,
+                 "Write the render meshes at the initial state as one OBJ object, the mesh the "
+                 "point caches move (a group per body)");
+  cli.add_option("--export-meshes", meshDir,
+                 "Write the render meshes at the initial state and every K-th step as an OBJ "
+                 "sequence into this folder (frame_STEP.obj, an object per body)");
   cli.add_option("--every", every, "Export every K-th step (default 1)")
       ->check(CLI::Range(1, 100000000));
   cli.add_option("--format", format, "Frame format: obj or bin (see sim/scene/frame_export.h)")
@@ -153,12 +166,32 @@ int runHeadlessCommand(int argc, char** argv) {
   scene.world.setSettings(settings);
 
   const FrameFormat frameFormat = format == "bin" ? FrameFormat::Binary : FrameFormat::Obj;
-  if (!exportDir.empty()) {
+  const bool renderExport =
+      !pc2Path.empty() || !mddPath.empty() || !restMeshPath.empty() || !meshDir.empty();
+  if (renderExport) {
+    if (noDeform) {
+      std::fprintf(stderr,
+                   "softbody run: --no-deform: the render meshes would not follow the bodies; "
+                   "it cannot be combined with --export-pc2, --export-mdd, --export-mesh or "
+                   "--export-meshes\n");
+      return 1;
+    }
+    if (std::none_of(scene.bodies.begin(), scene.bodies.end(),
+                     [](const SceneBody& b) { return b.render != nullptr; })) {
+      std::fprintf(stderr,
+                   "softbody run: %s has no render meshes to export (no body names a "
+                   "renderMesh); export the particles with --export\n",
+                   scenePath.c_str());
+      return 1;
+    }
+  }
+  for (const std::string* dir : {&exportDir, &meshDir}) {
+    if (dir->empty()) continue;
     std::error_code ec;
-    std::filesystem::create_directories(exportDir, ec);
-    if (ec || !std::filesystem::is_directory(exportDir)) {
-      std::fprintf(stderr, "softbody run: --export %s: cannot create the folder\n",
-                   exportDir.c_str());
+    std::filesystem::create_directories(*dir, ec);
+    if (ec || !std::filesystem::is_directory(*dir)) {
+      std::fprintf(stderr, "softbody run: %s %s: cannot create the folder\n",
+                   dir == &exportDir ? "--export" : "--export-meshes", dir->c_str());
       return 1;
     }
   }
@@ -175,22 +208,56 @@ int runHeadlessCommand(int argc, char** argv) {
       scenePath.c_str(), scene.bodies.size(), particles, clusters, renderVertices,
       settings.timeStep, scene.world.substepsFor(settings.timeStep), threadCount());
 
+  // Render-mesh exports: the initial state, then every K-th step. A failure stops the run; the
+  // caches are published only when complete (an unfinished one is removed).
+  std::vector<std::unique_ptr<PointCacheWriter>> caches;
+  auto exportRenderFrame = [&](int step) {
+    for (auto& cache : caches) cache->addFrame(runner.renderMeshes());
+    if (!meshDir.empty()) {
+      char name[64];
+      std::snprintf(name, sizeof name, "frame_%06d.obj", step);
+      writeRenderMeshesObj(scene, runner.renderMeshes(),
+                           (std::filesystem::path(meshDir) / name).string(), ObjObjects::PerBody);
+    }
+  };
+  try {
+    const int frames = steps / every + 1;
+    const double interval = settings.timeStep * every;
+    if (!pc2Path.empty())
+      caches.push_back(std::make_unique<PointCacheWriter>(pc2Path, PointCacheFormat::Pc2,
+                                                          int(renderVertices), frames,
+                                                          scene.world.time(), interval));
+    if (!mddPath.empty())
+      caches.push_back(std::make_unique<PointCacheWriter>(mddPath, PointCacheFormat::Mdd,
+                                                          int(renderVertices), frames,
+                                                          scene.world.time(), interval));
+    if (!restMeshPath.empty())
+      writeRenderMeshesObj(scene, runner.renderMeshes(), restMeshPath, ObjObjects::One);
+    if (renderExport) exportRenderFrame(0);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "softbody run: %s\n", e.what());
+    return 1;
+  }
+
   RunMonitor watch(scene.world);
   int exported = 0;
   for (int s = 1; s <= steps; ++s) {
     runner.step([&](const WorldEvent& e) {
       std::fprintf(stderr, "softbody run: step %d: %s\n", s, e.message.c_str());
     });
-    if (!exportDir.empty() && s % every == 0) {
-      char name[64];
-      std::snprintf(name, sizeof name, "frame_%06d.%s", s, format.c_str());
+    if (s % every == 0) {
       try {
-        writeFrame(scene, (std::filesystem::path(exportDir) / name).string(), frameFormat);
+        if (!exportDir.empty()) {
+          char name[64];
+          std::snprintf(name, sizeof name, "frame_%06d.%s", s, format.c_str());
+          writeFrame(scene, (std::filesystem::path(exportDir) / name).string(), frameFormat);
+          ++exported;
+        }
+        if (renderExport) exportRenderFrame(s);
       } catch (const std::exception& e) {
         std::fprintf(stderr, "softbody run: %s\n", e.what());
         return 1;
       }
-      ++exported;
     }
     if (monitor > 0 && s % monitor == 0) watch.print(scene.world.lastContactCount());
   }
@@ -200,6 +267,17 @@ int runHeadlessCommand(int argc, char** argv) {
                 scene.world.name(b.handle).c_str(), c.x(), c.y(), c.z());
   }
   if (!exportDir.empty()) std::printf("exported %d frames to %s\n", exported, exportDir.c_str());
+  try {
+    for (auto& cache : caches) cache->finish();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "softbody run: %s\n", e.what());
+    return 1;
+  }
+  const int renderFrames = steps / every + 1;
+  if (!pc2Path.empty()) std::printf("exported %d frames to %s\n", renderFrames, pc2Path.c_str());
+  if (!mddPath.empty()) std::printf("exported %d frames to %s\n", renderFrames, mddPath.c_str());
+  if (!restMeshPath.empty()) std::printf("exported the rest mesh to %s\n", restMeshPath.c_str());
+  if (!meshDir.empty()) std::printf("exported %d frames to %s\n", renderFrames, meshDir.c_str());
   std::printf("state hash %016llx after %.4f s simulated\n",
               static_cast<unsigned long long>(scene.world.stateHash()), scene.world.time());
   std::printf("%.1f body-body contacts per sub-step on average\n",

@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <utility>
 
 namespace sb {
 
@@ -30,29 +31,35 @@ void syncFile(const std::string& path) {
 
 }  // namespace
 
-void writeFileAtomic(const std::string& path, const std::function<void(std::ostream&)>& write) {
+AtomicFileWriter::AtomicFileWriter(std::string path) : path_(std::move(path)) {
   static std::atomic<unsigned> counter{0};
-  const std::string tmp =
-      path + ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
-  try {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out)
-      throw FileError(path + ": cannot create the temporary file " + tmp + ": " + errnoText());
-    write(out);
-    out.flush();
-    if (!out) throw FileError(path + ": cannot write (disk full or I/O error)");
-    out.close();
-    if (!out) throw FileError(path + ": cannot write (disk full or I/O error)");
-  } catch (...) {
-    std::remove(tmp.c_str());
-    throw;
-  }
-  syncFile(tmp);
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const std::string why = errnoText();
-    std::remove(tmp.c_str());
-    throw FileError(path + ": cannot replace the file: " + why);
-  }
+  tmp_ = path_ + ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
+  out_.open(tmp_, std::ios::binary | std::ios::trunc);
+  if (!out_)
+    throw FileError(path_ + ": cannot create the temporary file " + tmp_ + ": " + errnoText());
+}
+
+AtomicFileWriter::~AtomicFileWriter() {
+  if (committed_) return;
+  out_.close();
+  std::remove(tmp_.c_str());
+}
+
+void AtomicFileWriter::commit() {
+  out_.flush();
+  if (!out_) throw FileError(path_ + ": cannot write (disk full or I/O error)");
+  out_.close();
+  if (!out_) throw FileError(path_ + ": cannot write (disk full or I/O error)");
+  syncFile(tmp_);
+  if (std::rename(tmp_.c_str(), path_.c_str()) != 0)
+    throw FileError(path_ + ": cannot replace the file: " + errnoText());
+  committed_ = true;
+}
+
+void writeFileAtomic(const std::string& path, const std::function<void(std::ostream&)>& write) {
+  AtomicFileWriter file(path);
+  write(file.stream());
+  file.commit();
 }
 
 std::string readFileBounded(const std::string& path, std::uint64_t maxBytes) {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <fstream>
 #include <functional>
 #include <iosfwd>
 #include <stdexcept>
@@ -22,6 +23,30 @@ class FileError : public std::runtime_error {
 // is untouched and FileError says why. `write` may throw; the exception is passed on after the
 // clean-up.
 void writeFileAtomic(const std::string& path, const std::function<void(std::ostream&)>& write);
+
+// The same for a file written in parts over time (a point cache filled frame by frame): the
+// bytes go to the temporary file, which commit() flushes and renames over PATH. Until then PATH
+// is untouched; a writer destroyed without a successful commit() removes the temporary file, so
+// an interrupted export leaves nothing behind. Throws FileError naming PATH.
+class AtomicFileWriter {
+ public:
+  explicit AtomicFileWriter(std::string path);
+  ~AtomicFileWriter();
+  AtomicFileWriter(const AtomicFileWriter&) = delete;
+  AtomicFileWriter& operator=(const AtomicFileWriter&) = delete;
+
+  // The temporary file, opened binary; seekable (a header may be patched at the end).
+  std::ostream& stream() { return out_; }
+  // Checks the stream, flushes the data to the device and renames the file over PATH.
+  void commit();
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+  std::string tmp_;
+  std::ofstream out_;
+  bool committed_ = false;
+};
 
 // Reads a whole regular file of at most maxBytes bytes. Refuses, with FileError, what is not a
 // regular file (a folder, FIFO, device such as /dev/zero: none of them can block or stream

@@ -60,6 +60,58 @@ void writeFrame(const Scene& scene, const std::string& path, FrameFormat format)
   });
 }
 
+void writeRenderMeshesObj(const Scene& scene, const std::vector<PointsRowMajor>& meshes,
+                          const std::string& path, ObjObjects objects) {
+  if (meshes.size() != scene.bodies.size())
+    throw std::invalid_argument(path + ": " + std::to_string(meshes.size()) +
+                                " render meshes for a scene of " +
+                                std::to_string(scene.bodies.size()) + " bodies");
+  // The text is built in memory with to_chars (no stream or printf per number: a large scene's
+  // sequence is hundreds of MB) and written at once.
+  size_t vertices = 0, triangles = 0;
+  for (size_t b = 0; b < meshes.size(); ++b) {
+    vertices += size_t(meshes[b].rows());
+    triangles += scene.renderTriangles(int(b)).size();
+  }
+  std::string text;
+  text.reserve(64 * meshes.size() + 40 * vertices + 24 * triangles);
+  char number[64];
+  auto append = [&](auto value) {
+    text.append(number, std::to_chars(number, number + sizeof number, value).ptr);
+  };
+  std::snprintf(number, sizeof number, "%.9g", scene.world.time());
+  text += "# softbody frame, time ";
+  text += number;
+  text += " s\n";
+  if (objects == ObjObjects::One) text += "o softbody\n";
+  int base = 1;
+  for (size_t b = 0; b < meshes.size(); ++b) {
+    text += objects == ObjObjects::One ? "g " : "o ";
+    text += scene.world.name(scene.bodies[b].handle);
+    text += '\n';
+    const PointsRowMajor& x = meshes[b];
+    for (Eigen::Index i = 0; i < x.rows(); ++i) {
+      text += 'v';
+      for (int c = 0; c < 3; ++c) {
+        text += ' ';
+        append(x(i, c));  // the shortest decimal that reads back as this float
+      }
+      text += '\n';
+    }
+    for (const auto& t : scene.renderTriangles(int(b))) {
+      text += 'f';
+      for (int c = 0; c < 3; ++c) {
+        text += ' ';
+        append(t[size_t(c)] + base);
+      }
+      text += '\n';
+    }
+    base += static_cast<int>(x.rows());
+  }
+  writeFileAtomic(path,
+                  [&](std::ostream& out) { out.write(text.data(), std::streamsize(text.size())); });
+}
+
 namespace {
 
 [[noreturn]] void frameFail(const std::string& name, const std::string& reason) {
@@ -141,6 +193,8 @@ Frame parseObjFrame(const std::string& d, const std::string& name) {
       if (!f.bodies.back().name.empty() && f.bodies.back().name[0] == ' ')
         f.bodies.back().name.erase(0, 1);
       base = int(vertices);
+    } else if (tokens[0] == "g") {
+      // A group inside an object (writeRenderMeshesObj, ObjObjects::One): no new body.
     } else if (tokens[0] == "v") {
       if (f.bodies.empty()) frameFail(name, where + "a vertex before the first object");
       if (tokens.size() != 4) frameFail(name, where + "a vertex needs three numbers");
