@@ -10,6 +10,7 @@
 #include "app/commands.h"
 #include "sim/base/parallel.h"
 #include "sim/scene/frame_export.h"
+#include "sim/scene/gltf_take.h"
 #include "sim/scene/point_cache.h"
 #include "sim/scene/scene.h"
 #include "sim/scene/scene_runner.h"
@@ -103,7 +104,7 @@ int runHeadlessCommand(int argc, char** argv) {
   int substeps = 0;
   double maxSubstep = 0;
   std::string exportDir;
-  std::string pc2Path, mddPath, restMeshPath, meshDir;
+  std::string pc2Path, mddPath, gltfPath, restMeshPath, meshDir;
   int every = 1;
   std::string format = "obj";
   int threads = 0;
@@ -126,6 +127,10 @@ int runHeadlessCommand(int argc, char** argv) {
                  "Write the render meshes' vertices at the initial state and every K-th step as "
                  "one PC2 point cache (all bodies, in scene order; see --export-mesh)");
   cli.add_option("--export-mdd", mddPath, "The same as an MDD point cache");
+  cli.add_option("--export-gltf", gltfPath,
+                 "Write the render meshes at the initial state and every K-th step as one glTF "
+                 "binary (.glb): a mesh per body, the frames as morph targets keyed by an "
+                 "animation (sim/scene/gltf_take.h)");
   cli.add_option("--export-mesh", restMeshPath,
                  "Write the render meshes at the initial state as one OBJ object, the mesh the "
                  "point caches move (a group per body)");
@@ -166,14 +171,14 @@ int runHeadlessCommand(int argc, char** argv) {
   scene.world.setSettings(settings);
 
   const FrameFormat frameFormat = format == "bin" ? FrameFormat::Binary : FrameFormat::Obj;
-  const bool renderExport =
-      !pc2Path.empty() || !mddPath.empty() || !restMeshPath.empty() || !meshDir.empty();
+  const bool renderExport = !pc2Path.empty() || !mddPath.empty() || !gltfPath.empty() ||
+                            !restMeshPath.empty() || !meshDir.empty();
   if (renderExport) {
     if (noDeform) {
       std::fprintf(stderr,
                    "softbody run: --no-deform: the render meshes would not follow the bodies; "
-                   "it cannot be combined with --export-pc2, --export-mdd, --export-mesh or "
-                   "--export-meshes\n");
+                   "it cannot be combined with --export-pc2, --export-mdd, --export-gltf, "
+                   "--export-mesh or --export-meshes\n");
       return 1;
     }
     if (std::none_of(scene.bodies.begin(), scene.bodies.end(),
@@ -211,8 +216,10 @@ int runHeadlessCommand(int argc, char** argv) {
   // Render-mesh exports: the initial state, then every K-th step. A failure stops the run; the
   // caches are published only when complete (an unfinished one is removed).
   std::vector<std::unique_ptr<PointCacheWriter>> caches;
+  std::unique_ptr<GltfTakeWriter> gltf;
   auto exportRenderFrame = [&](int step) {
     for (auto& cache : caches) cache->addFrame(runner.renderMeshes());
+    if (gltf) gltf->addFrame(runner.renderMeshes());
     if (!meshDir.empty()) {
       char name[64];
       std::snprintf(name, sizeof name, "frame_%06d.obj", step);
@@ -231,6 +238,12 @@ int runHeadlessCommand(int argc, char** argv) {
       caches.push_back(std::make_unique<PointCacheWriter>(mddPath, PointCacheFormat::Mdd,
                                                           int(renderVertices), frames,
                                                           scene.world.time(), interval));
+    if (!gltfPath.empty()) {
+      std::vector<int> vertexCounts;
+      for (const PointsRowMajor& mesh : runner.renderMeshes())
+        vertexCounts.push_back(int(mesh.rows()));
+      gltf = std::make_unique<GltfTakeWriter>(gltfPath, scene, vertexCounts, frames, interval);
+    }
     if (!restMeshPath.empty())
       writeRenderMeshesObj(scene, runner.renderMeshes(), restMeshPath, ObjObjects::One);
     if (renderExport) exportRenderFrame(0);
@@ -269,6 +282,7 @@ int runHeadlessCommand(int argc, char** argv) {
   if (!exportDir.empty()) std::printf("exported %d frames to %s\n", exported, exportDir.c_str());
   try {
     for (auto& cache : caches) cache->finish();
+    if (gltf) gltf->finish();
   } catch (const std::exception& e) {
     std::fprintf(stderr, "softbody run: %s\n", e.what());
     return 1;
@@ -276,6 +290,7 @@ int runHeadlessCommand(int argc, char** argv) {
   const int renderFrames = steps / every + 1;
   if (!pc2Path.empty()) std::printf("exported %d frames to %s\n", renderFrames, pc2Path.c_str());
   if (!mddPath.empty()) std::printf("exported %d frames to %s\n", renderFrames, mddPath.c_str());
+  if (!gltfPath.empty()) std::printf("exported %d frames to %s\n", renderFrames, gltfPath.c_str());
   if (!restMeshPath.empty()) std::printf("exported the rest mesh to %s\n", restMeshPath.c_str());
   if (!meshDir.empty()) std::printf("exported %d frames to %s\n", renderFrames, meshDir.c_str());
   std::printf("state hash %016llx after %.4f s simulated\n",

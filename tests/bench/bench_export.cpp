@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "sim/scene/frame_export.h"
+#include "sim/scene/gltf_take.h"
 #include "sim/scene/point_cache.h"
 #include "sim/scene/scene.h"
 #include "sim/scene/scene_runner.h"
@@ -68,6 +69,21 @@ void BM_ExportPointCache(benchmark::State& state) {
   state.SetLabel(format == PointCacheFormat::Pc2 ? "pc2" : "mdd");
 }
 BENCHMARK(BM_ExportPointCache)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// One glTF binary: a mesh per body, the frames as morph targets (softbody run --export-gltf).
+void BM_ExportGltf(benchmark::State& state) {
+  const Take& t = take();
+  const std::string path = outDir() / "take.glb";
+  std::vector<int> counts;
+  for (const PointsRowMajor& m : t.states[0]) counts.push_back(int(m.rows()));
+  for (auto _ : state) {
+    GltfTakeWriter gltf(path, t.scene, counts, kFrames, 1.0 / 30);
+    for (int k = 0; k < kFrames; ++k) gltf.addFrame(t.states[size_t(k % 10)]);
+    gltf.finish();
+  }
+  report(state, (long long)std::filesystem::file_size(path));
+}
+BENCHMARK(BM_ExportGltf)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // An OBJ per frame, an object per body (softbody run --export-meshes).
 void BM_ExportObjSequence(benchmark::State& state) {

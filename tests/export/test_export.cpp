@@ -12,7 +12,10 @@
 #include <tuple>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "sim/scene/frame_export.h"
+#include "sim/scene/gltf_take.h"
 #include "sim/scene/point_cache.h"
 #include "sim/scene/scene.h"
 #include "sim/scene/scene_runner.h"
@@ -194,6 +197,142 @@ TEST_F(Export, RenderMeshObjHoldsEveryBodysVerticesExactly) {
   EXPECT_THROW(writeRenderMeshesObj(scene, {meshes[0]}, path("short.obj"), ObjObjects::One),
                std::invalid_argument);
   EXPECT_FALSE(fs::exists(path("short.obj")));
+}
+
+// The glTF take read back by this test's own GLB reading (chunks per the glTF 2.0 spec): every
+// accessor inside its view and the buffer, positions' min/max equal to the data, frame k =
+// positions + morph target k − 1, the weights keying target k − 1 at frame k.
+TEST_F(Export, GltfTakeHoldsEveryFrameAsMorphTargetsKeyedInTime) {
+  Scene scene = loadScene(std::string(SOFTBODY_ASSET_DIR) + "/scenes/default.json");
+  SceneRunner runner(scene, true);
+  std::vector<int> counts;
+  for (const PointsRowMajor& m : runner.renderMeshes()) counts.push_back(int(m.rows()));
+  const int frames = 4;
+  const double interval = 0.125;
+  std::vector<std::vector<PointsRowMajor>> taken;
+  {
+    GltfTakeWriter take(path("t.glb"), scene, counts, frames, interval);
+    for (int k = 0; k < frames; ++k) {
+      if (k > 0)
+        for (int s = 0; s < 10; ++s) runner.step();
+      taken.push_back(runner.renderMeshes());
+      take.addFrame(taken.back());
+      EXPECT_FALSE(fs::exists(path("t.glb")));
+    }
+    take.finish();
+  }
+  const std::string d = contents(path("t.glb"));
+  ASSERT_GE(d.size(), 28u);
+  EXPECT_EQ(d.substr(0, 4), "glTF");
+  EXPECT_EQ(readU32(d, 4, false), 2u);
+  EXPECT_EQ(readU32(d, 8, false), d.size());
+  const std::uint32_t jsonBytes = readU32(d, 12, false);
+  EXPECT_EQ(d.substr(16, 4), "JSON");
+  EXPECT_EQ(jsonBytes % 4, 0u);
+  const nlohmann::json j = nlohmann::json::parse(d.substr(20, jsonBytes));
+  const size_t binAt = 20 + jsonBytes;
+  const std::uint32_t binBytes = readU32(d, binAt, false);
+  EXPECT_EQ(d.substr(binAt + 4, 4), std::string("BIN\0", 4));
+  ASSERT_EQ(binAt + 8 + binBytes, d.size());
+  EXPECT_EQ(j["buffers"][0]["byteLength"], binBytes);
+  const char* bin = d.data() + binAt + 8;
+
+  // Every accessor's data lies inside its view, and every view inside the buffer.
+  for (const auto& v : j["bufferViews"])
+    EXPECT_LE(v["byteOffset"].get<size_t>() + v["byteLength"].get<size_t>(), binBytes);
+  auto elementBytes = [](const nlohmann::json& a) { return a["type"] == "VEC3" ? 12u : 4u; };
+  for (const auto& a : j["accessors"]) {
+    const auto& v = j["bufferViews"][a["bufferView"].get<size_t>()];
+    EXPECT_LE(a.value("byteOffset", size_t(0)) + a["count"].get<size_t>() * elementBytes(a),
+              v["byteLength"].get<size_t>());
+  }
+  auto floats = [&](const nlohmann::json& a) {
+    const auto& v = j["bufferViews"][a["bufferView"].get<size_t>()];
+    const char* at = bin + v["byteOffset"].get<size_t>() + a.value("byteOffset", size_t(0));
+    std::vector<float> out(a["count"].get<size_t>() * (a["type"] == "VEC3" ? 3 : 1));
+    std::memcpy(out.data(), at, out.size() * 4);
+    return out;
+  };
+
+  ASSERT_EQ(j["meshes"].size(), scene.bodies.size());
+  for (size_t b = 0; b < scene.bodies.size(); ++b) {
+    EXPECT_EQ(j["nodes"][b]["name"], scene.world.name(scene.bodies[b].handle));
+    const auto& prim = j["meshes"][b]["primitives"][0];
+    // Triangles as the scene draws them.
+    const auto& ia = j["accessors"][prim["indices"].get<size_t>()];
+    const auto& iv = j["bufferViews"][ia["bufferView"].get<size_t>()];
+    const auto& tris = scene.renderTriangles(int(b));
+    ASSERT_EQ(ia["count"].get<size_t>(), 3 * tris.size());
+    for (size_t t = 0; t < tris.size(); ++t)
+      for (int c = 0; c < 3; ++c)
+        ASSERT_EQ(readU32(d,
+                          binAt + 8 + iv["byteOffset"].get<size_t>() +
+                              ia.value("byteOffset", size_t(0)) + 12 * t + 4 * size_t(c),
+                          false),
+                  std::uint32_t(tris[t][size_t(c)]));
+    // Frame k = positions + target k - 1; min/max are those of the accessor's data.
+    const auto& base = j["accessors"][prim["attributes"]["POSITION"].get<size_t>()];
+    const std::vector<float> x0 = floats(base);
+    ASSERT_EQ(prim["targets"].size(), size_t(frames - 1));
+    for (int k = 0; k < frames; ++k) {
+      const auto& acc =
+          k == 0 ? base : j["accessors"][prim["targets"][size_t(k - 1)]["POSITION"].get<size_t>()];
+      const std::vector<float> data = floats(acc);
+      for (int c = 0; c < 3; ++c) {
+        float lo = data[size_t(c)], hi = lo;
+        for (size_t i = size_t(c); i < data.size(); i += 3)
+          lo = std::min(lo, data[i]), hi = std::max(hi, data[i]);
+        EXPECT_EQ(acc["min"][size_t(c)].get<double>(), double(lo));
+        EXPECT_EQ(acc["max"][size_t(c)].get<double>(), double(hi));
+      }
+      const PointsRowMajor& want = taken[size_t(k)][b];
+      float worst = 0;
+      for (Eigen::Index i = 0; i < want.rows(); ++i)
+        for (int c = 0; c < 3; ++c) {
+          const float got =
+              k == 0 ? x0[size_t(3 * i + c)] : x0[size_t(3 * i + c)] + data[size_t(3 * i + c)];
+          worst = std::max(worst, std::abs(got - want(i, c)));
+        }
+      // Exact for frame 0; later frames carry the round-off of one float subtraction and
+      // addition (a few ulp of coordinates below 4 m).
+      EXPECT_LE(worst, k == 0 ? 0.0f : 1e-6f) << "body " << b << " frame " << k;
+    }
+    // Its animation: key times k * interval, weight k - 1 at frame k.
+    const auto& anim = j["animations"][0];
+    const auto& channel = anim["channels"][b];
+    EXPECT_EQ(channel["target"]["node"], b);
+    EXPECT_EQ(channel["target"]["path"], "weights");
+    const auto& sampler = anim["samplers"][channel["sampler"].get<size_t>()];
+    EXPECT_EQ(sampler["interpolation"], "LINEAR");
+    const std::vector<float> times = floats(j["accessors"][sampler["input"].get<size_t>()]);
+    const std::vector<float> weights = floats(j["accessors"][sampler["output"].get<size_t>()]);
+    ASSERT_EQ(times.size(), size_t(frames));
+    ASSERT_EQ(weights.size(), size_t(frames * (frames - 1)));
+    for (int k = 0; k < frames; ++k) {
+      EXPECT_EQ(times[size_t(k)], float(interval * k));
+      for (int t = 0; t < frames - 1; ++t)
+        EXPECT_EQ(weights[size_t(k * (frames - 1) + t)], t == k - 1 ? 1.0f : 0.0f);
+    }
+  }
+}
+
+TEST_F(Export, GltfTakeRefusesWrongFramesAndPublishesNothingUnfinished) {
+  Scene scene = loadScene(std::string(SOFTBODY_ASSET_DIR) + "/scenes/default.json");
+  SceneRunner runner(scene, true);
+  std::vector<int> counts;
+  for (const PointsRowMajor& m : runner.renderMeshes()) counts.push_back(int(m.rows()));
+  EXPECT_THROW(GltfTakeWriter(path("a.glb"), scene, {1, 2}, 2, 0.1), std::invalid_argument);
+  EXPECT_THROW(GltfTakeWriter(path("a.glb"), scene, counts, 0, 0.1), std::invalid_argument);
+  EXPECT_THROW(GltfTakeWriter(path("a.glb"), scene, counts, 2, 0.0), std::invalid_argument);
+  {
+    GltfTakeWriter take(path("a.glb"), scene, counts, 2, 0.1);
+    std::vector<PointsRowMajor> wrong = runner.renderMeshes();
+    wrong[1].conservativeResize(wrong[1].rows() - 1, 3);
+    EXPECT_THROW(take.addFrame(wrong), std::invalid_argument);
+    take.addFrame(runner.renderMeshes());
+    EXPECT_THROW(take.finish(), std::logic_error);  // one frame of two
+  }
+  EXPECT_TRUE(files().empty());
 }
 
 }  // namespace
