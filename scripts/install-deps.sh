@@ -2,7 +2,8 @@
 # Installs the Debian 12 packages softbody needs, and only those that are missing.
 # clang (with its sanitizer runtimes, libFuzzer and OpenMP) builds the TSan and fuzz stages of CI;
 # clang-format checks the formatting (scripts/check-format.sh). Blender (headless) reads the
-# exports back in the tests (tests/export); python3-numpy is what its glTF importer needs.
+# exports back in the tests (tests/export). The Python module: pybind11 and python3-dev to build
+# it, numpy (also what Blender's glTF importer needs) and pytest to test it.
 # Safe to run repeatedly; needs root (or sudo) only when something is missing.
 set -euo pipefail
 packages=(
@@ -11,7 +12,7 @@ packages=(
   libstb-dev nlohmann-json3-dev libcli11-dev
   xvfb xauth libgl1-mesa-dri mesa-utils x11-apps imagemagick xdotool
   clang clang-format libclang-rt-14-dev libfuzzer-14-dev libomp-14-dev
-  blender python3-numpy
+  blender python3-dev pybind11-dev python3-numpy python3-pytest
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <map>
 #include <stdexcept>
+#include <type_traits>
 
 #include "sim/mesh/closed_surface.h"
 #include "sim/world/body.h"
@@ -19,6 +20,11 @@
 #include "sim/world/work_layout.h"
 
 namespace sb {
+
+// Views of a body's arrays (World::positions and the like, handed to Python as NumPy views)
+// stay valid while other bodies are added: growing the slot table moves each body's Eigen
+// arrays, whose heap buffers stay where they are, instead of copying them.
+static_assert(std::is_nothrow_move_constructible_v<BodySlot>);
 
 namespace {
 

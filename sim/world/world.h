@@ -134,6 +134,8 @@ class World {
   std::vector<std::vector<int>> clusterMembers(BodyHandle body) const;
 
   // ---- per-body particle data (#P×3, metres or m/s; rows in the order of BodyDef::positions) --
+  // The views returned stay valid (same memory, current values) across steps, resets and the
+  // addition of other bodies; removing the body or rebuilding its clusters ends them.
   int particleCount(BodyHandle body) const;
   ConstPointsRef positions(BodyHandle body) const;
   ConstPointsRef velocities(BodyHandle body) const;

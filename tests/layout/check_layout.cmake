@@ -1,5 +1,5 @@
 # The dependency rule of docs/design.md §2, checked on the includes of every source file:
-#   app → scene → {world, cage} → mesh → base;  render alone;  nothing of sim/ sees GL or ImGui;
+#   {app, python} → scene → {world, cage} → mesh → base;  render alone;  nothing of sim/ sees GL or ImGui;
 #   JSON only in sim/scene (and app); OpenMesh only in sim/mesh sources (.cpp); mesh files are not
 #   read by sim/world.
 # Usage: cmake -DROOT=<tree> -P check_layout.cmake   (fails, listing every wrong include)
@@ -15,10 +15,11 @@ set(allowed_sim_world "sim/base/;sim/mesh/;sim/world/")
 set(allowed_sim_scene "sim/base/;sim/mesh/;sim/cage/;sim/world/;sim/scene/")
 set(allowed_render "render/")
 set(allowed_app "sim/base/;sim/mesh/;sim/cage/;sim/world/;sim/scene/;render/;app/")
+set(allowed_python "sim/base/;sim/mesh/;sim/cage/;sim/world/;sim/scene/;python/")
 
 set(violations "")
 set(checked 0)
-foreach(part sim/base sim/mesh sim/cage sim/world sim/scene render app)
+foreach(part sim/base sim/mesh sim/cage sim/world sim/scene render app python)
   string(REPLACE "/" "_" key "${part}")
   set(allowed "${allowed_${key}}")
   file(GLOB_RECURSE sources RELATIVE "${ROOT}" "${ROOT}/${part}/*.h" "${ROOT}/${part}/*.cpp")
@@ -33,7 +34,7 @@ foreach(part sim/base sim/mesh sim/cage sim/world sim/scene render app)
       endif()
       set(wrong "")
       # Project headers: only from the allowed folders.
-      if(header MATCHES "^(sim|render|app)/")
+      if(header MATCHES "^(sim|render|app|python)/")
         set(ok FALSE)
         foreach(prefix ${allowed})
           string(LENGTH "${prefix}" n)
