@@ -66,48 +66,52 @@ void writeRenderMeshesObj(const Scene& scene, const std::vector<PointsRowMajor>&
     throw std::invalid_argument(path + ": " + std::to_string(meshes.size()) +
                                 " render meshes for a scene of " +
                                 std::to_string(scene.bodies.size()) + " bodies");
-  // The text is built in memory with to_chars (no stream or printf per number: a large scene's
-  // sequence is hundreds of MB) and written at once.
-  size_t vertices = 0, triangles = 0;
+  // The text is formed in memory with to_chars through a cursor into room sized for the longest
+  // lines (no stream, printf or string append per number: a large scene's sequence is hundreds
+  // of MB), then written at once.
+  size_t names = 0, vertices = 0, triangles = 0;
   for (size_t b = 0; b < meshes.size(); ++b) {
+    names += scene.world.name(scene.bodies[b].handle).size();
     vertices += size_t(meshes[b].rows());
     triangles += scene.renderTriangles(int(b)).size();
   }
-  std::string text;
-  text.reserve(64 * meshes.size() + 40 * vertices + 24 * triangles);
-  char number[64];
-  auto append = [&](auto value) {
-    text.append(number, std::to_chars(number, number + sizeof number, value).ptr);
+  // A float's shortest form is at most 15 characters ("-1.17549435e-38"), an int's 11.
+  std::string text(96 + 16 + names + 4 * meshes.size() + vertices * (2 + 3 * 16) +
+                       triangles * (2 + 3 * 12),
+                   '\0');
+  char* at = text.data();
+  char* const end = text.data() + text.size();
+  auto put = [&](std::string_view s) {
+    std::memcpy(at, s.data(), s.size());
+    at += s.size();
   };
-  std::snprintf(number, sizeof number, "%.9g", scene.world.time());
-  text += "# softbody frame, time ";
-  text += number;
-  text += " s\n";
-  if (objects == ObjObjects::One) text += "o softbody\n";
+  at += std::snprintf(at, 96, "# softbody frame, time %.9g s\n", scene.world.time());
+  if (objects == ObjObjects::One) put("o softbody\n");
   int base = 1;
   for (size_t b = 0; b < meshes.size(); ++b) {
-    text += objects == ObjObjects::One ? "g " : "o ";
-    text += scene.world.name(scene.bodies[b].handle);
-    text += '\n';
+    put(objects == ObjObjects::One ? "g " : "o ");
+    put(scene.world.name(scene.bodies[b].handle));
+    *at++ = '\n';
     const PointsRowMajor& x = meshes[b];
     for (Eigen::Index i = 0; i < x.rows(); ++i) {
-      text += 'v';
+      *at++ = 'v';
       for (int c = 0; c < 3; ++c) {
-        text += ' ';
-        append(x(i, c));  // the shortest decimal that reads back as this float
+        *at++ = ' ';
+        at = std::to_chars(at, end, x(i, c)).ptr;  // the shortest decimal that reads back as it
       }
-      text += '\n';
+      *at++ = '\n';
     }
     for (const auto& t : scene.renderTriangles(int(b))) {
-      text += 'f';
+      *at++ = 'f';
       for (int c = 0; c < 3; ++c) {
-        text += ' ';
-        append(t[size_t(c)] + base);
+        *at++ = ' ';
+        at = std::to_chars(at, end, t[size_t(c)] + base).ptr;
       }
-      text += '\n';
+      *at++ = '\n';
     }
     base += static_cast<int>(x.rows());
   }
+  text.resize(size_t(at - text.data()));
   writeFileAtomic(path,
                   [&](std::ostream& out) { out.write(text.data(), std::streamsize(text.size())); });
 }
