@@ -223,7 +223,7 @@ PYBIND11_MODULE(softbody, m) {
 
   m.def("set_thread_count", &setThreadCount, "threads"_a,
         "Threads every world steps with (0: all cores). Results are bit-identical at any count.");
-  m.def("thread_count", &threadCount);
+  m.def("thread_count", &threadCount, "Threads the worlds step with.");
 
   py::enum_<Mode>(m, "Mode", "How a cluster's goal follows its particles.")
       .value("RIGID", Mode::Rigid)
@@ -328,8 +328,12 @@ PYBIND11_MODULE(softbody, m) {
           "settings", [](PyWorld& w) { return w.get().settings(); },
           [](PyWorld& w, const WorldSettings& s) { w.get().setSettings(s); },
           "a copy; assign a changed WorldSettings to apply it (ValueError when out of range)")
-      .def("add_collider", [](PyWorld& w, const Collider& c) { w.get().addCollider(c); })
-      .def("clear_colliders", [](PyWorld& w) { w.get().clearColliders(); })
+      .def(
+          "add_collider", [](PyWorld& w, const Collider& c) { w.get().addCollider(c); },
+          "collider"_a, "Adds a static collider; wakes sleeping bodies.")
+      .def(
+          "clear_colliders", [](PyWorld& w) { w.get().clearColliders(); },
+          "Removes every collider.")
       .def(
           "add_body",
           [](PyWorld& w, const BodyDef& d) {
@@ -349,21 +353,38 @@ PYBIND11_MODULE(softbody, m) {
             w.world->removeBody(h);
             w.liveViews.erase(keyOf(h));
           },
+          "body"_a,
+          "Removes a body; RuntimeError while NumPy views of it are alive (they would point at "
+          "freed memory).")
+      .def(
+          "bodies", [](PyWorld& w) { return w.get().bodies(); }, "The bodies in creation order.")
+      .def(
+          "contains", [](PyWorld& w, BodyHandle h) { return w.get().contains(h); }, "body"_a,
+          "Whether the body is still in the world.")
+      .def(
+          "name", [](PyWorld& w, BodyHandle h) { return w.get().name(h); }, "body"_a)
+      .def(
+          "params", [](PyWorld& w, BodyHandle h) { return w.get().params(h); }, "body"_a,
+          "A copy of the body's BodyParams; change it and pass it to set_params.")
+      .def(
+          "set_params",
+          [](PyWorld& w, BodyHandle h, const BodyParams& p) { w.get().setParams(h, p); }, "body"_a,
+          "params"_a, "Applies new material parameters (ValueError naming the field).")
+      .def(
+          "set_clusters",
+          [](PyWorld& w, BodyHandle h, const ClusterDef& c) {
+            w.get();
+            w.refuseIfViewed(h, "set_clusters");
+            w.world->setClusters(h, c);
+          },
+          "body"_a, "clusters"_a,
+          "Rebuilds the body's clusters (plasticity cleared); refused while views of it live.")
+      .def(
+          "cluster_count", [](PyWorld& w, BodyHandle h) { return w.get().clusterCount(h); },
           "body"_a)
-      .def("bodies", [](PyWorld& w) { return w.get().bodies(); })
-      .def("contains", [](PyWorld& w, BodyHandle h) { return w.get().contains(h); })
-      .def("name", [](PyWorld& w, BodyHandle h) { return w.get().name(h); })
-      .def("params", [](PyWorld& w, BodyHandle h) { return w.get().params(h); })
-      .def("set_params",
-           [](PyWorld& w, BodyHandle h, const BodyParams& p) { w.get().setParams(h, p); })
-      .def("set_clusters",
-           [](PyWorld& w, BodyHandle h, const ClusterDef& c) {
-             w.get();
-             w.refuseIfViewed(h, "set_clusters");
-             w.world->setClusters(h, c);
-           })
-      .def("cluster_count", [](PyWorld& w, BodyHandle h) { return w.get().clusterCount(h); })
-      .def("particle_count", [](PyWorld& w, BodyHandle h) { return w.get().particleCount(h); })
+      .def(
+          "particle_count", [](PyWorld& w, BodyHandle h) { return w.get().particleCount(h); },
+          "body"_a)
       .def(
           "positions",
           [](PyWorld& w, BodyHandle h) { return worldView(w, h, w.get().positions(h)); }, "body"_a,
@@ -380,9 +401,14 @@ PYBIND11_MODULE(softbody, m) {
           "goals", [](PyWorld& w, BodyHandle h) { return w.get().goals(h); }, "body"_a,
           "The goal positions of the last step (P, 3), float64: a copy (they are formed on "
           "demand).")
-      .def("masses", [](PyWorld& w, BodyHandle h) { return w.get().masses(h); })
-      .def("mass", [](PyWorld& w, BodyHandle h) { return w.get().mass(h); })
-      .def("centre_of_mass", [](PyWorld& w, BodyHandle h) { return w.get().centreOfMass(h); })
+      .def(
+          "masses", [](PyWorld& w, BodyHandle h) { return w.get().masses(h); }, "body"_a,
+          "kg per particle, float32 (P,) (a copy)")
+      .def(
+          "mass", [](PyWorld& w, BodyHandle h) { return w.get().mass(h); }, "body"_a, "kg")
+      .def(
+          "centre_of_mass", [](PyWorld& w, BodyHandle h) { return w.get().centreOfMass(h); },
+          "body"_a, "m, (3,)")
       .def(
           "set_state",
           [](PyWorld& w, BodyHandle h, const py::object& x, const py::object& v) {
@@ -395,8 +421,12 @@ PYBIND11_MODULE(softbody, m) {
           },
           "body"_a, "positions"_a, "velocities"_a,
           "Overwrites positions (m) and velocities (m/s), any numeric arrays of shape (P, 3).")
-      .def("add_force", [](PyWorld& w, BodyHandle h, int particle,
-                           const Vec3& f) { w.get().addForce(h, particle, f); })
+      .def(
+          "add_force",
+          [](PyWorld& w, BodyHandle h, int particle, const Vec3& f) {
+            w.get().addForce(h, particle, f);
+          },
+          "body"_a, "particle"_a, "force"_a, "A force (N, (3,)) on one particle for the next step.")
       .def(
           "add_drag",
           [](PyWorld& w, BodyHandle h, std::vector<int> particles, std::vector<double> weights,
@@ -404,10 +434,15 @@ PYBIND11_MODULE(softbody, m) {
             return w.get().addDrag(
                 DragDef{h, std::move(particles), std::move(weights), target, stiffness});
           },
-          "body"_a, "particles"_a, "weights"_a, "target"_a, "stiffness"_a = 0.2)
-      .def("set_drag_target",
-           [](PyWorld& w, int id, const Vec3& t) { w.get().setDragTarget(id, t); })
-      .def("remove_drag", [](PyWorld& w, int id) { w.get().removeDrag(id); })
+          "body"_a, "particles"_a, "weights"_a, "target"_a, "stiffness"_a = 0.2,
+          "Pulls the point Σ wⱼ xⱼ of the listed particles toward target (m) by the fraction "
+          "stiffness (0, 1] of the gap per step, as the viewer's mouse drag; returns its id.")
+      .def(
+          "set_drag_target",
+          [](PyWorld& w, int id, const Vec3& t) { w.get().setDragTarget(id, t); }, "id"_a,
+          "target"_a)
+      .def(
+          "remove_drag", [](PyWorld& w, int id) { w.get().removeDrag(id); }, "id"_a)
       .def(
           "step",
           [](PyWorld& w, int n) {
@@ -417,17 +452,24 @@ PYBIND11_MODULE(softbody, m) {
           "n"_a = 1,
           "Advances n steps of settings.time_step. Releases the GIL; views show the new state "
           "after it returns.")
-      .def("reset", [](PyWorld& w) { w.get().reset(); })
+      .def(
+          "reset", [](PyWorld& w) { w.get().reset(); },
+          "Every body back to its start state; plasticity and drags cleared; time 0.")
       .def_property_readonly(
           "time", [](PyWorld& w) { return w.get().time(); }, "s simulated")
-      .def("is_sleeping", [](PyWorld& w, BodyHandle h) { return w.get().isSleeping(h); })
-      .def("wake", [](PyWorld& w, BodyHandle h) { w.get().wake(h); })
-      .def("take_events",
-           [](PyWorld& w) {
-             std::vector<std::string> out;
-             for (const WorldEvent& e : w.get().takeEvents()) out.push_back(e.message);
-             return out;
-           })
+      .def(
+          "is_sleeping", [](PyWorld& w, BodyHandle h) { return w.get().isSleeping(h); }, "body"_a)
+      .def(
+          "wake", [](PyWorld& w, BodyHandle h) { w.get().wake(h); }, "body"_a,
+          "Wakes the body and every body that fell asleep with it.")
+      .def(
+          "take_events",
+          [](PyWorld& w) {
+            std::vector<std::string> out;
+            for (const WorldEvent& e : w.get().takeEvents()) out.push_back(e.message);
+            return out;
+          },
+          "Messages of what happened since the last call (a body that went NaN was reset, …).")
       .def(
           "state_hash", [](PyWorld& w) { return w.get().stateHash(); },
           "64-bit hash of positions, velocities and plastic state (as `softbody run` prints)");
@@ -499,7 +541,8 @@ PYBIND11_MODULE(softbody, m) {
           "add_frame",
           [](PointCacheWriter& c, PyScene& s) { c.addFrame(s.runner->renderMeshes()); }, "scene"_a,
           "Appends the scene's render meshes as they are now.")
-      .def("finish", &PointCacheWriter::finish);
+      .def("finish", &PointCacheWriter::finish,
+           "Publishes the cache; RuntimeError when frames are missing (nothing is written).");
 
   py::class_<GltfTakeWriter>(m, "GltfTake",
                              "A glTF 2.0 binary take of a scene's render meshes (morph "
@@ -514,7 +557,8 @@ PYBIND11_MODULE(softbody, m) {
       .def(
           "add_frame", [](GltfTakeWriter& g, PyScene& s) { g.addFrame(s.runner->renderMeshes()); },
           "scene"_a)
-      .def("finish", &GltfTakeWriter::finish);
+      .def("finish", &GltfTakeWriter::finish,
+           "Publishes the take; RuntimeError when frames are missing (nothing is written).");
 
   m.def(
       "write_render_obj",

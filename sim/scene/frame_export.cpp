@@ -76,9 +76,9 @@ void writeRenderMeshesObj(const Scene& scene, const std::vector<PointsRowMajor>&
     triangles += scene.renderTriangles(int(b)).size();
   }
   // A float's shortest form is at most 15 characters ("-1.17549435e-38"), an int's 11.
-  std::string text(96 + 16 + names + 4 * meshes.size() + vertices * (2 + 3 * 16) +
-                       triangles * (2 + 3 * 12),
-                   '\0');
+  std::string text(
+      96 + 16 + names + 4 * meshes.size() + vertices * (2 + 3 * 16) + triangles * (2 + 3 * 12),
+      '\0');
   char* at = text.data();
   char* const end = text.data() + text.size();
   auto put = [&](std::string_view s) {
