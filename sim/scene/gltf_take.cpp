@@ -113,6 +113,16 @@ std::unique_ptr<GltfTakeWriter::Layout> GltfTakeWriter::makeLayout(
   const int animationView = int(views.size());
   // View 1: key times and weights.
   const size_t timeBytes = 4 * size_t(frameCount);
+  const size_t frameBytes = 12 * size_t(l.totalVertices);
+  // GLB sizes are 32-bit: checked (in double, which cannot overflow here) before anything of
+  // the size of frames × bodies or frames² is built.
+  const double wholeBuffer =
+      double(indexBytes) + 4.0 * frameCount * frameCount + double(frameCount) * double(frameBytes);
+  if (wholeBuffer > double(0xF0000000u))
+    throw std::invalid_argument(
+        path + ": the take would be " + formatBytes(std::uint64_t(wholeBuffer)) +
+        ", more than a glTF binary can hold (4 GB); export fewer frames (--every) or use a "
+        "point cache");
   const size_t weightBytes = 4 * size_t(frameCount) * size_t(targets);
   views.push_back(
       {{"buffer", 0}, {"byteOffset", indexBytes}, {"byteLength", timeBytes + weightBytes}});
@@ -135,7 +145,6 @@ std::unique_ptr<GltfTakeWriter::Layout> GltfTakeWriter::makeLayout(
   // be, so the JSON's room is enough whatever the data.
   const double longest = -double(std::numeric_limits<float>::min());
   size_t offset = indexBytes + timeBytes + weightBytes;
-  const size_t frameBytes = 12 * size_t(l.totalVertices);
   l.firstPositionAccessor = int(accessors.size());
   for (int k = 0; k < frameCount; ++k) {
     const int view = int(views.size());
@@ -157,11 +166,6 @@ std::unique_ptr<GltfTakeWriter::Layout> GltfTakeWriter::makeLayout(
     offset += frameBytes;
   }
   l.binBytes = offset;
-  // GLB sizes are 32-bit.
-  if (l.binBytes > 0xF0000000ull)
-    throw std::invalid_argument(path + ": the take would be " + formatBytes(l.binBytes) +
-                                ", more than a glTF binary can hold (4 GB); export fewer "
-                                "frames (--every) or use a point cache");
 
   nlohmann::json samplers = nlohmann::json::array(), channels = nlohmann::json::array();
   for (size_t b = 0; b < bodies; ++b) {

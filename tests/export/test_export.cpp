@@ -324,6 +324,15 @@ TEST_F(Export, GltfTakeRefusesWrongFramesAndPublishesNothingUnfinished) {
   EXPECT_THROW(GltfTakeWriter(path("a.glb"), scene, {1, 2}, 2, 0.1), std::invalid_argument);
   EXPECT_THROW(GltfTakeWriter(path("a.glb"), scene, counts, 0, 0.1), std::invalid_argument);
   EXPECT_THROW(GltfTakeWriter(path("a.glb"), scene, counts, 2, 0.0), std::invalid_argument);
+  // Beyond what a GLB's 32-bit sizes hold: refused up front, before anything of that size is
+  // built (100,000 frames of 5.5k vertices would be 6.7 GB; the weights alone 40 GB).
+  try {
+    GltfTakeWriter(path("a.glb"), scene, counts, 100000, 0.1);
+    FAIL() << "a take beyond 4 GB was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("more than a glTF binary can hold"), std::string::npos)
+        << e.what();
+  }
   {
     GltfTakeWriter take(path("a.glb"), scene, counts, 2, 0.1);
     std::vector<PointsRowMajor> wrong = runner.renderMeshes();
