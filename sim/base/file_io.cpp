@@ -33,6 +33,9 @@ void syncFile(const std::string& path) {
 
 AtomicFileWriter::AtomicFileWriter(std::string path) : path_(std::move(path)) {
   static std::atomic<unsigned> counter{0};
+  std::error_code ec;
+  if (std::filesystem::is_directory(path_, ec))
+    throw FileError(path_ + ": is a directory, not a file");
   tmp_ = path_ + ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
   out_.open(tmp_, std::ios::binary | std::ios::trunc);
   if (!out_)
@@ -43,6 +46,11 @@ AtomicFileWriter::~AtomicFileWriter() {
   if (committed_) return;
   out_.close();
   std::remove(tmp_.c_str());
+}
+
+void AtomicFileWriter::write(const void* data, std::size_t bytes) {
+  out_.write(static_cast<const char*>(data), static_cast<std::streamsize>(bytes));
+  if (!out_) throw FileError(path_ + ": cannot write (disk full or I/O error)");
 }
 
 void AtomicFileWriter::commit() {

@@ -2,6 +2,7 @@
 // of the project goes through here).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <fstream>
 #include <functional>
@@ -27,7 +28,8 @@ void writeFileAtomic(const std::string& path, const std::function<void(std::ostr
 // The same for a file written in parts over time (a point cache filled frame by frame): the
 // bytes go to the temporary file, which commit() flushes and renames over PATH. Until then PATH
 // is untouched; a writer destroyed without a successful commit() removes the temporary file, so
-// an interrupted export leaves nothing behind. Throws FileError naming PATH.
+// an interrupted export leaves nothing behind. Throws FileError naming PATH, at once when PATH
+// is a folder (not after a long export).
 class AtomicFileWriter {
  public:
   explicit AtomicFileWriter(std::string path);
@@ -37,6 +39,8 @@ class AtomicFileWriter {
 
   // The temporary file, opened binary; seekable (a header may be patched at the end).
   std::ostream& stream() { return out_; }
+  // Appends bytes to it; FileError (disk full, I/O error) names PATH.
+  void write(const void* data, std::size_t bytes);
   // Checks the stream, flushes the data to the device and renames the file over PATH.
   void commit();
   const std::string& path() const { return path_; }

@@ -38,16 +38,11 @@ namespace {
 constexpr std::uint32_t kArrayBuffer = 34962, kElementArrayBuffer = 34963;
 constexpr std::uint32_t kFloat = 5126, kUnsignedInt = 5125;
 
-void writeBytes(AtomicFileWriter& file, const void* data, size_t bytes) {
-  std::ostream& out = file.stream();
-  out.write(static_cast<const char*>(data), static_cast<std::streamsize>(bytes));
-  if (!out) throw FileError(file.path() + ": cannot write (disk full or I/O error)");
-}
 void writeU32(AtomicFileWriter& file, std::uint32_t v) {
   const unsigned char b[4] = {static_cast<unsigned char>(v), static_cast<unsigned char>(v >> 8),
                               static_cast<unsigned char>(v >> 16),
                               static_cast<unsigned char>(v >> 24)};
-  writeBytes(file, b, 4);
+  file.write(b, 4);
 }
 // float32 data in the file's little-endian order (the machines softbody builds on are
 // little-endian; a big-endian one is refused at compile time rather than writing garbage).
@@ -56,7 +51,7 @@ void writeFloats(AtomicFileWriter& file, const float* data, size_t count) {
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__
 #error "glTF buffers are little-endian: add a byte swap here for big-endian machines"
 #endif
-  writeBytes(file, data, count * 4);
+  file.write(data, count * 4);
 }
 
 }  // namespace
@@ -211,7 +206,7 @@ GltfTakeWriter::GltfTakeWriter(const std::string& path, const Scene& scene,
   const Layout& l = *layout_;
   // The header and the JSON's room are written at finish(); zeros hold their place.
   const std::vector<char> room(12 + 8 + l.jsonBytes, 0);
-  writeBytes(file_, room.data(), room.size());
+  file_.write(room.data(), room.size());
   writeU32(file_, std::uint32_t(l.binBytes));
   writeU32(file_, 0x004E4942);  // "BIN\0"
   for (size_t b = 0; b < scene.bodies.size(); ++b)
@@ -284,7 +279,7 @@ void GltfTakeWriter::finish() {
   writeU32(file_, std::uint32_t(12 + 8 + l.jsonBytes + 8 + l.binBytes));
   writeU32(file_, std::uint32_t(l.jsonBytes));
   writeU32(file_, 0x4E4F534A);  // "JSON"
-  writeBytes(file_, text.data(), text.size());
+  file_.write(text.data(), text.size());
   file_.commit();
 }
 

@@ -3,7 +3,6 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <ostream>
 #include <stdexcept>
 
 namespace sb {
@@ -22,12 +21,6 @@ std::uint32_t bitsOf(float f) {
   std::uint32_t v;
   std::memcpy(&v, &f, 4);
   return v;
-}
-
-void writeBytes(AtomicFileWriter& file, const char* data, size_t bytes) {
-  std::ostream& out = file.stream();
-  out.write(data, static_cast<std::streamsize>(bytes));
-  if (!out) throw FileError(file.path() + ": cannot write (disk full or I/O error)");
 }
 
 // The path, once the layout is known to be valid: checked before the file is created.
@@ -58,14 +51,14 @@ PointCacheWriter::PointCacheWriter(const std::string& path, PointCacheFormat for
     put32(header + 20, bitsOf(float(startTime / frameInterval)), false);
     put32(header + 24, bitsOf(1.0f), false);
     put32(header + 28, std::uint32_t(frameCount), false);
-    writeBytes(file_, header, sizeof header);
+    file_.write(header, sizeof header);
   } else {
     std::vector<char> header(8 + 4 * size_t(frameCount));
     put32(header.data(), std::uint32_t(frameCount), true);
     put32(header.data() + 4, std::uint32_t(pointCount), true);
     for (int k = 0; k < frameCount; ++k)
       put32(header.data() + 8 + 4 * size_t(k), bitsOf(float(startTime + k * frameInterval)), true);
-    writeBytes(file_, header.data(), header.size());
+    file_.write(header.data(), header.size());
   }
 }
 
@@ -84,7 +77,7 @@ void PointCacheWriter::addFrame(const std::vector<PointsRowMajor>& parts) {
     const float* x = p.data();
     for (Eigen::Index i = 0; i < 3 * p.rows(); ++i, at += 4) put32(at, bitsOf(x[i]), bigEndian);
   }
-  writeBytes(file_, buffer_.data(), buffer_.size());
+  file_.write(buffer_.data(), buffer_.size());
   ++written_;
 }
 

@@ -153,6 +153,10 @@ TEST_F(Export, WrongFramesAndLayoutsAreRefusedWithoutWriting) {
   }
   EXPECT_EQ(files(), std::vector<std::string>{"t.mdd"});
 
+  // A folder as the target is refused at once, not when a long export is done.
+  fs::create_directories(path("folder.pc2"));
+  EXPECT_THROW(PointCacheWriter(path("folder.pc2"), PointCacheFormat::Pc2, 5, 1, 0, 1), FileError);
+  fs::remove(path("folder.pc2"));
   try {
     PointCacheWriter(path("no/such/folder/t.pc2"), PointCacheFormat::Pc2, 5, 1, 0, 1);
     FAIL() << "a cache in a missing folder was accepted";
