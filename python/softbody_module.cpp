@@ -96,7 +96,7 @@ py::array readOnlyView(const float* data, Eigen::Index rows, py::ssize_t rowStri
   });
   py::array view(py::dtype::of<float>(), {py::ssize_t(rows), py::ssize_t(3)},
                  {rowStride, columnStride}, data, base);
-  py::detail::array_proxy(view.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+  view.attr("setflags")("write"_a = false);
   return view;
 }
 
@@ -539,8 +539,11 @@ PYBIND11_MODULE(softbody, m) {
            "scene"_a, "path"_a, "format"_a, "frames"_a, "frame_interval"_a)
       .def(
           "add_frame",
-          [](PointCacheWriter& c, PyScene& s) { c.addFrame(s.runner->renderMeshes()); }, "scene"_a,
-          "Appends the scene's render meshes as they are now.")
+          [](PointCacheWriter& c, PyScene& s) {
+            s.world->get();  // not while it steps in another thread
+            c.addFrame(s.runner->renderMeshes());
+          },
+          "scene"_a, "Appends the scene's render meshes as they are now.")
       .def("finish", &PointCacheWriter::finish,
            "Publishes the cache; RuntimeError when frames are missing (nothing is written).");
 
@@ -555,14 +558,19 @@ PYBIND11_MODULE(softbody, m) {
            }),
            "scene"_a, "path"_a, "frames"_a, "frame_interval"_a)
       .def(
-          "add_frame", [](GltfTakeWriter& g, PyScene& s) { g.addFrame(s.runner->renderMeshes()); },
-          "scene"_a)
+          "add_frame",
+          [](GltfTakeWriter& g, PyScene& s) {
+            s.world->get();  // not while it steps in another thread
+            g.addFrame(s.runner->renderMeshes());
+          },
+          "scene"_a, "Appends the scene's render meshes as they are now.")
       .def("finish", &GltfTakeWriter::finish,
            "Publishes the take; RuntimeError when frames are missing (nothing is written).");
 
   m.def(
       "write_render_obj",
       [](PyScene& s, const std::string& path, bool oneObject) {
+        s.world->get();  // not while it steps in another thread
         writeRenderMeshesObj(s.scene, s.runner->renderMeshes(), path,
                              oneObject ? ObjObjects::One : ObjObjects::PerBody);
       },
