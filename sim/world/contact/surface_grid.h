@@ -48,12 +48,9 @@ class SurfaceGrid {
   template <typename Bound, typename Visit>
   void forEachNear(const Vec3f& p, float extra, const Bound& bound, const Visit& visit) const;
 
-  // Squared distance (m²) from p to the bounding box of triangle t at build time: a lower
-  // bound on its distance to the triangle, to skip triangles without the exact test.
-  float boxDistanceSquared(int t, const Vec3f& p) const {
-    return boxDistanceSquared(t, Eigen::Array4f(p.x(), p.y(), p.z(), 0.0f));
-  }
-  // The same with p as (x, y, z, 0): the form the look-up loops use, four lanes at once.
+  // Squared distance (m²) from p = (x, y, z, 0) to the bounding box of triangle t at build time:
+  // a lower bound on its distance to the triangle, to skip triangles without the exact test.
+  // Four lanes at once, no branch.
   float boxDistanceSquared(int t, const Eigen::Array4f& p) const {
     const PaddedBox& b = paddedBoxes_[size_t(t)];
     const Eigen::Array4f gap = (b.min - p).max(p - b.max).max(0.0f);
