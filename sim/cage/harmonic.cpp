@@ -1,0 +1,442 @@
+#include "sim/cage/harmonic.h"
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include "sim/base/file_io.h"
+#include "sim/base/parallel_for.h"
+#include "sim/cage/auto_cage_geometry.h"
+#include "sim/mesh/closed_surface.h"
+#include "sim/mesh/closest_point.h"
+
+namespace sb::cage {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+// Hat functions of the cage at its point closest to x: the closest triangle and the barycentric
+// weights of its corners (brute force over all triangles; only for the few points that need it).
+struct CagePoint {
+  int triangle = -1;
+  Vec3 bary = Vec3::Zero();
+  double distance = std::numeric_limits<double>::infinity();
+};
+CagePoint closestCagePoint(const Vec3& x, const mesh::TriangleMesh& cage) {
+  CagePoint best;
+  for (int t = 0; t < static_cast<int>(cage.triangles.size()); ++t) {
+    const auto& tri = cage.triangles[size_t(t)];
+    const Vec3 &a = cage.vertices[size_t(tri[0])], &b = cage.vertices[size_t(tri[1])],
+               &c = cage.vertices[size_t(tri[2])];
+    const auto cp = mesh::closestPointOnTriangle<double>(x, a, b, c);
+    const double d = (cp.weights[0] * a + cp.weights[1] * b + cp.weights[2] * c - x).norm();
+    if (d < best.distance) best = {t, cp.weights, d};
+  }
+  return best;
+}
+
+// Nested dissection of a set of grid nodes (ids i + nx·(j + ny·k)) for the 7-point stencil:
+// the plane through the middle of the set's box, across its longest side, separates the nodes
+// on either side (no stencil couples them), so they are numbered first, each half recursively,
+// and the plane last. The factor of the Laplacian then fills in only within the separators'
+// blocks: O(n^{4/3}) non-zeros for n unknowns, against O(n^{5/3}) for a plain row order.
+void nestedDissection(std::vector<std::int64_t>& nodes, std::int64_t nx, std::int64_t ny,
+                      std::vector<std::int64_t>& order) {
+  if (nodes.size() <= 64) {
+    std::sort(nodes.begin(), nodes.end());
+    order.insert(order.end(), nodes.begin(), nodes.end());
+    return;
+  }
+  auto coord = [&](std::int64_t id, int a) {
+    return a == 0 ? id % nx : a == 1 ? (id / nx) % ny : id / (nx * ny);
+  };
+  std::int64_t lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = std::numeric_limits<std::int64_t>::max();
+    hi[a] = std::numeric_limits<std::int64_t>::min();
+  }
+  for (const std::int64_t id : nodes)
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], coord(id, a));
+      hi[a] = std::max(hi[a], coord(id, a));
+    }
+  int axis = 0;
+  for (int a = 1; a < 3; ++a)
+    if (hi[a] - lo[a] > hi[axis] - lo[axis]) axis = a;
+  const std::int64_t cut = (lo[axis] + hi[axis]) / 2;
+  std::vector<std::int64_t> left, right, separator;
+  for (const std::int64_t id : nodes) {
+    const std::int64_t c = coord(id, axis);
+    (c < cut ? left : c > cut ? right : separator).push_back(id);
+  }
+  std::vector<std::int64_t>().swap(nodes);
+  nestedDissection(left, nx, ny, order);
+  nestedDissection(right, nx, ny, order);
+  std::sort(separator.begin(), separator.end());
+  order.insert(order.end(), separator.begin(), separator.end());
+}
+
+}  // namespace
+
+Embedding bindHarmonic(const std::vector<Vec3>& points, const mesh::TriangleMesh& cage,
+                       const HarmonicOptions& options, HarmonicReport* reportOut) {
+  const auto t0 = Clock::now();
+  mesh::validateClosedSurface(cage, "cage");
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!points[i].allFinite())
+      throw std::invalid_argument("bindHarmonic: point " + std::to_string(i) + " is not finite");
+  }
+  if (options.resolution < 4)
+    throw std::invalid_argument("bindHarmonic: resolution must be at least 4 cells, got " +
+                                std::to_string(options.resolution));
+  const int threads =
+      options.threads > 0 ? std::min(options.threads, threadCount()) : threadCount();
+  const int n = static_cast<int>(points.size());
+  const int m = static_cast<int>(cage.vertices.size());
+  const auto& V = cage.vertices;
+  const auto& T = cage.triangles;
+
+  // Grid: cubic cells of size h, `margin` cells beyond the cage's box on every side (so every
+  // node within √3·h of the cage is a grid node), centred on the box.
+  constexpr int kMargin = 2;
+  Eigen::AlignedBox3d box;
+  for (const Vec3& v : V) box.extend(v);
+  const Vec3 extent = box.sizes();
+  const double diagonal = extent.norm();
+  const double h = extent.maxCoeff() / options.resolution;
+  std::array<int, 3> dims{};
+  double nodeCount = 1.0;
+  for (int a = 0; a < 3; ++a) {
+    const double cells = std::ceil(extent[a] / h - 1e-9);
+    nodeCount *= cells + 1.0 + 2.0 * kMargin;
+    dims[size_t(a)] = static_cast<int>(std::min(cells + 1.0 + 2.0 * kMargin, 1e9));
+  }
+  // Memory: per node the distance, closest triangle, barycentrics, unknown index and flags (~48
+  // bytes); the solutions, right-hand side blocks and factor of the interior nodes (bounded by
+  // the node count until they are known); the dense weights (double + float).
+  auto refuse = [&](double bytes, const std::string& what) {
+    throw std::runtime_error("bindHarmonic: " + what + " need about " +
+                             formatBytes(std::uint64_t(bytes)) + ", more than the " +
+                             formatBytes(options.maxBytes) + " allowed");
+  };
+  const double weightBytes = 12.0 * double(n) * double(m);
+  const double gridBytes = 48.0 * nodeCount;
+  if (nodeCount > 2e9 || gridBytes + weightBytes > double(options.maxBytes))
+    refuse(gridBytes + weightBytes, "a grid of " + std::to_string(dims[0]) + "×" +
+                                        std::to_string(dims[1]) + "×" + std::to_string(dims[2]) +
+                                        " nodes (resolution " + std::to_string(options.resolution) +
+                                        ") and " + std::to_string(n) + "×" + std::to_string(m) +
+                                        " dense weights");
+  const Vec3 origin = box.center() - 0.5 * h * Vec3(dims[0] - 1, dims[1] - 1, dims[2] - 1);
+  const std::int64_t nx = dims[0], ny = dims[1], nz = dims[2];
+  const std::int64_t N = nx * ny * nz;
+  auto nodePos = [&](std::int64_t i, std::int64_t j, std::int64_t k) {
+    return Vec3(origin.x() + double(i) * h, origin.y() + double(j) * h, origin.z() + double(k) * h);
+  };
+
+  // 1. Distance to the cage and its closest point, for the nodes within R = √3·h of a triangle
+  //    (per triangle, over the nodes of its box grown by R).
+  const double R = std::sqrt(3.0) * h * (1.0 + 1e-9);
+  std::vector<double> dist(size_t(N), std::numeric_limits<double>::infinity());
+  std::vector<int> closestTri(size_t(N), -1);
+  std::vector<Vec3> bary(static_cast<std::size_t>(N));
+  for (int t = 0; t < static_cast<int>(T.size()); ++t) {
+    const Vec3 &a = V[size_t(T[size_t(t)][0])], &b = V[size_t(T[size_t(t)][1])],
+               &c = V[size_t(T[size_t(t)][2])];
+    const Vec3 lo = (a.cwiseMin(b).cwiseMin(c) - origin).array() - R;
+    const Vec3 hi = (a.cwiseMax(b).cwiseMax(c) - origin).array() + R;
+    std::array<std::int64_t, 3> i0{}, i1{};
+    for (int d = 0; d < 3; ++d) {
+      i0[size_t(d)] = std::max<std::int64_t>(0, std::int64_t(std::ceil(lo[d] / h)));
+      i1[size_t(d)] = std::min<std::int64_t>(dims[size_t(d)] - 1, std::int64_t(hi[d] / h));
+    }
+    for (std::int64_t k = i0[2]; k <= i1[2]; ++k)
+      for (std::int64_t j = i0[1]; j <= i1[1]; ++j)
+        for (std::int64_t i = i0[0]; i <= i1[0]; ++i) {
+          const Vec3 p = nodePos(i, j, k);
+          const auto cp = mesh::closestPointOnTriangle<double>(p, a, b, c);
+          const double d = (cp.weights[0] * a + cp.weights[1] * b + cp.weights[2] * c - p).norm();
+          const std::int64_t id = i + nx * (j + ny * k);
+          if (d < dist[size_t(id)]) {
+            dist[size_t(id)] = d;
+            closestTri[size_t(id)] = t;
+            bary[size_t(id)] = cp.weights;
+          }
+        }
+  }
+
+  // 2. Inside / outside by the parity of the crossings of a ray along +x through each row of
+  //    nodes. The ray is moved off the row by a tiny irrational fraction of h so that it passes
+  //    through no cage vertex or edge; that changes the answer only for nodes within ~1e-7·h of
+  //    the cage, which are boundary nodes whatever they are. A row with an odd crossing count
+  //    (a degenerate hit after all) falls back to the winding number per node.
+  const double dy = h * 1.2345678e-7, dz = h * 0.8765432e-7;
+  std::vector<std::pair<std::int64_t, double>> crossings;  // (row j + ny·k, x)
+  for (const auto& tri : T) {
+    const Vec3 &a = V[size_t(tri[0])], &b = V[size_t(tri[1])], &c = V[size_t(tri[2])];
+    const double jlo = (std::min({a.y(), b.y(), c.y()}) - origin.y() - dy) / h;
+    const double jhi = (std::max({a.y(), b.y(), c.y()}) - origin.y() - dy) / h;
+    const double klo = (std::min({a.z(), b.z(), c.z()}) - origin.z() - dz) / h;
+    const double khi = (std::max({a.z(), b.z(), c.z()}) - origin.z() - dz) / h;
+    for (std::int64_t k = std::max<std::int64_t>(0, std::int64_t(std::ceil(klo)));
+         k <= std::min<std::int64_t>(nz - 1, std::int64_t(std::floor(khi))); ++k)
+      for (std::int64_t j = std::max<std::int64_t>(0, std::int64_t(std::ceil(jlo)));
+           j <= std::min<std::int64_t>(ny - 1, std::int64_t(std::floor(jhi))); ++j) {
+        const double y = origin.y() + double(j) * h + dy, z = origin.z() + double(k) * h + dz;
+        // Signed areas of the sub-triangles in the yz plane.
+        auto orient = [&](const Vec3& p, const Vec3& q) {
+          return (p.y() - y) * (q.z() - z) - (p.z() - z) * (q.y() - y);
+        };
+        const double ea = orient(b, c), eb = orient(c, a), ec = orient(a, b);
+        if (!((ea > 0 && eb > 0 && ec > 0) || (ea < 0 && eb < 0 && ec < 0))) continue;
+        const double s = ea + eb + ec;
+        crossings.emplace_back(j + ny * k, (ea * a.x() + eb * b.x() + ec * c.x()) / s);
+      }
+  }
+  std::sort(crossings.begin(), crossings.end());
+  std::vector<unsigned char> inside(size_t(N), 0);
+  for (std::size_t c0 = 0; c0 < crossings.size();) {
+    std::size_t c1 = c0;
+    while (c1 < crossings.size() && crossings[c1].first == crossings[c0].first) ++c1;
+    const std::int64_t row = crossings[c0].first;
+    const std::int64_t base = nx * row;
+    if ((c1 - c0) % 2 == 0) {
+      std::size_t c = c0;
+      for (std::int64_t i = 0; i < nx; ++i) {
+        const double x = origin.x() + double(i) * h;
+        while (c < c1 && crossings[c].second < x) ++c;
+        inside[size_t(base + i)] = static_cast<unsigned char>((c - c0) % 2);
+      }
+    } else {
+      const std::int64_t j = row % ny, k = row / ny;
+      for (std::int64_t i = 0; i < nx; ++i) {
+        const Vec3 p = nodePos(i, j, k);
+        double angles = 0.0;
+        for (const auto& tri : T)
+          angles += detail::solidAngle(p, V[size_t(tri[0])], V[size_t(tri[1])], V[size_t(tri[2])]);
+        inside[size_t(base + i)] = angles > 2.0 * M_PI ? 1 : 0;
+      }
+    }
+    c0 = c1;
+  }
+
+  // 3. Unknowns: inside nodes farther than h from the cage. Each of their 6 neighbours is then
+  //    an unknown or lies within h of the cage (a segment of length h from an inside node to an
+  //    outside one crosses the cage), so it carries boundary values. Boundary nodes: every other
+  //    node within R = √3·h; with them every grid cell that meets the inside of the cage has
+  //    values at all 8 corners.
+  std::vector<int> unknown(size_t(N), -1);
+  std::int64_t nB = 0;
+  std::vector<std::int64_t> unknownNodes;
+  for (std::int64_t id = 0; id < N; ++id) {
+    if (inside[size_t(id)] && dist[size_t(id)] > h)
+      unknownNodes.push_back(id);
+    else if (closestTri[size_t(id)] >= 0)
+      ++nB;
+  }
+  std::vector<unsigned char>().swap(inside);
+  const std::int64_t nI = static_cast<std::int64_t>(unknownNodes.size());
+  if (nI >= std::numeric_limits<int>::max())
+    throw std::runtime_error("bindHarmonic: " + std::to_string(nI) + " unknowns, too many");
+  {
+    std::vector<std::int64_t> order;
+    order.reserve(size_t(nI));
+    if (options.ordering == HarmonicOrdering::NestedDissection)
+      nestedDissection(unknownNodes, nx, ny, order);
+    else
+      order.swap(unknownNodes);
+    for (std::int64_t r = 0; r < nI; ++r) unknown[size_t(order[size_t(r)])] = static_cast<int>(r);
+  }
+  // The solution (8 bytes per unknown and cage vertex), the right-hand-side blocks (16 columns
+  // per thread) and the factor (measured ≤ ~60 non-zeros per unknown at 64³, 12 bytes each,
+  // counted at 100).
+  const double solveBytes = 8.0 * double(nI) * (double(m) + 16.0 * threads) + 1200.0 * double(nI);
+  if (gridBytes + weightBytes + solveBytes > double(options.maxBytes))
+    refuse(gridBytes + weightBytes + solveBytes, "the solve for " + std::to_string(nI) +
+                                                     " interior nodes × " + std::to_string(m) +
+                                                     " cage vertices");
+  const double classifySeconds = since(t0);
+
+  // 4. The 7-point Laplacian on the unknowns (6 on the diagonal, −1 per unknown neighbour; SPD,
+  //    an M-matrix) and its right-hand sides: per boundary neighbour, its hat values.
+  const auto tf = Clock::now();
+  struct RhsEntry {
+    int column, row;
+    double value;
+  };
+  std::vector<RhsEntry> rhs;
+  std::vector<Eigen::Triplet<double>> triplets;
+  triplets.reserve(size_t(nI) * 4);
+  const std::int64_t step[3] = {1, nx, nx * ny};
+  for (std::int64_t id = 0; id < N; ++id) {
+    const int r = unknown[size_t(id)];
+    if (r < 0) continue;
+    triplets.emplace_back(r, r, 6.0);
+    for (int a = 0; a < 3; ++a)
+      for (int s = -1; s <= 1; s += 2) {
+        const std::int64_t q = id + s * step[a];
+        const int c = unknown[size_t(q)];
+        if (c >= 0) {
+          if (c < r) triplets.emplace_back(r, c, -1.0);  // lower triangle only
+          continue;
+        }
+        const int t = closestTri[size_t(q)];
+        if (t < 0)
+          throw std::logic_error("bindHarmonic: an interior node has an unvalued neighbour");
+        for (int k = 0; k < 3; ++k)
+          if (bary[size_t(q)][k] != 0.0)
+            rhs.push_back({T[size_t(t)][size_t(k)], r, bary[size_t(q)][k]});
+      }
+  }
+  std::sort(rhs.begin(), rhs.end(),
+            [](const RhsEntry& x, const RhsEntry& y) { return x.column < y.column; });
+  Eigen::SparseMatrix<double> A(nI, nI);
+  A.setFromTriplets(triplets.begin(), triplets.end());
+  std::vector<Eigen::Triplet<double>>().swap(triplets);
+  // The unknowns are already numbered in nested-dissection order (or AMD is asked for).
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::NaturalOrdering<int>>
+      ldltNatural;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::AMDOrdering<int>> ldltAmd;
+  const bool amd = options.ordering == HarmonicOrdering::Amd;
+  if (nI > 0) {
+    if (amd)
+      ldltAmd.compute(A);
+    else
+      ldltNatural.compute(A);
+    if ((amd ? ldltAmd.info() : ldltNatural.info()) != Eigen::Success)
+      throw std::runtime_error("bindHarmonic: the factorisation of the Laplacian failed");
+  }
+  const double factorSeconds = since(tf);
+
+  // 5. One solve per cage vertex (column), blocks of 16 columns per call, the columns split
+  //    across threads. Each column is solved the same way whatever the split.
+  const auto ts = Clock::now();
+  Embedding::DenseD X(nI, m);  // row = unknown, column = cage vertex
+  std::vector<std::size_t> colStart(size_t(m) + 1, 0);
+  for (const RhsEntry& e : rhs) ++colStart[size_t(e.column) + 1];
+  for (int j = 0; j < m; ++j) colStart[size_t(j) + 1] += colStart[size_t(j)];
+  if (nI > 0) {
+    parallelRanges(m, 2, threads, [&](int j0, int j1) {
+      constexpr int kBlock = 16;
+      Eigen::MatrixXd B;
+      for (int b0 = j0; b0 < j1; b0 += kBlock) {
+        const int cols = std::min(kBlock, j1 - b0);
+        B.setZero(nI, cols);
+        for (int j = b0; j < b0 + cols; ++j)
+          for (std::size_t e = colStart[size_t(j)]; e < colStart[size_t(j) + 1]; ++e)
+            B(rhs[e].row, j - b0) += rhs[e].value;
+        if (amd)
+          X.middleCols(b0, cols) = ldltAmd.solve(B);
+        else
+          X.middleCols(b0, cols) = ldltNatural.solve(B);
+      }
+    });
+  }
+  const double solveSeconds = since(ts);
+
+  // 6. Trilinear lookup. A point whose cell has values at all 8 corners interpolates them (the
+  //    unknowns' solutions, the boundary nodes' hat values); any other point (outside the cage
+  //    by more than about a cell, or off the grid) takes the hat values of its closest cage
+  //    point, i.e. the boundary values continued outward along the normal.
+  const auto tl = Clock::now();
+  Embedding::DenseD W = Embedding::DenseD::Zero(n, m);
+  std::vector<unsigned char> usedClosest(size_t(n), 0);
+  parallelRanges(n, 256, threads, [&](int p0, int p1) {
+    for (int p = p0; p < p1; ++p) {
+      const Vec3 u = (points[size_t(p)] - origin) / h;
+      std::array<std::int64_t, 3> c{};
+      bool onGrid = true;
+      for (int a = 0; a < 3; ++a) {
+        const double f = std::floor(u[a]);
+        if (!(f >= 0.0 && f <= double(dims[size_t(a)] - 2))) onGrid = false;
+        c[size_t(a)] = onGrid ? std::int64_t(f) : 0;
+      }
+      const std::int64_t id0 = c[0] + nx * (c[1] + ny * c[2]);
+      bool valued = onGrid;
+      for (int corner = 0; valued && corner < 8; ++corner) {
+        const std::int64_t id = id0 + (corner & 1) * step[0] + ((corner >> 1) & 1) * step[1] +
+                                ((corner >> 2) & 1) * step[2];
+        valued = unknown[size_t(id)] >= 0 || closestTri[size_t(id)] >= 0;
+      }
+      auto row = W.row(p);
+      if (!valued) {
+        const CagePoint cp = closestCagePoint(points[size_t(p)], cage);
+        for (int k = 0; k < 3; ++k) row[T[size_t(cp.triangle)][size_t(k)]] += cp.bary[k];
+        usedClosest[size_t(p)] = 1;
+        continue;
+      }
+      const Vec3 f(u[0] - double(c[0]), u[1] - double(c[1]), u[2] - double(c[2]));
+      for (int corner = 0; corner < 8; ++corner) {
+        const std::int64_t id = id0 + (corner & 1) * step[0] + ((corner >> 1) & 1) * step[1] +
+                                ((corner >> 2) & 1) * step[2];
+        const double t = ((corner & 1) ? f[0] : 1.0 - f[0]) *
+                         (((corner >> 1) & 1) ? f[1] : 1.0 - f[1]) *
+                         (((corner >> 2) & 1) ? f[2] : 1.0 - f[2]);
+        if (t == 0.0) continue;
+        const int r = unknown[size_t(id)];
+        if (r >= 0) {
+          row += t * X.row(r);
+        } else {
+          const int tri = closestTri[size_t(id)];
+          for (int k = 0; k < 3; ++k) row[T[size_t(tri)][size_t(k)]] += t * bary[size_t(id)][k];
+        }
+      }
+    }
+  });
+  const double lookupSeconds = since(tl);
+
+  HarmonicReport rep;
+  rep.gridNodes = dims;
+  rep.cellSize = h;
+  rep.interiorNodes = nI;
+  rep.boundaryNodes = nB;
+  rep.factorNonZeros = nI == 0 ? 0
+                       : amd   ? ldltAmd.matrixL().nestedExpression().nonZeros()
+                               : ldltNatural.matrixL().nestedExpression().nonZeros();
+  rep.classifySeconds = classifySeconds;
+  rep.factorSeconds = factorSeconds;
+  rep.solveSeconds = solveSeconds;
+  rep.lookupSeconds = lookupSeconds;
+  rep.minWeight = n > 0 ? std::numeric_limits<double>::infinity() : 0.0;
+  double maxWeight = n > 0 ? -std::numeric_limits<double>::infinity() : 0.0;
+  std::int64_t negatives = 0;
+  Eigen::Matrix<double, Eigen::Dynamic, 3> cageMat(m, 3);
+  for (int j = 0; j < m; ++j) cageMat.row(j) = V[size_t(j)].transpose();
+  for (int p = 0; p < n; ++p) {
+    rep.closestPointPoints += usedClosest[size_t(p)];
+    rep.maxSumError = std::max(rep.maxSumError, std::abs(W.row(p).sum() - 1.0));
+    rep.minWeight = std::min(rep.minWeight, W.row(p).minCoeff());
+    maxWeight = std::max(maxWeight, W.row(p).maxCoeff());
+    negatives += (W.row(p).array() < 0.0).count();
+    const Vec3 x = (W.row(p) * cageMat).transpose();
+    rep.maxLinearError = std::max(rep.maxLinearError, (x - points[size_t(p)]).norm() / diagonal);
+  }
+
+  Embedding e = Embedding::fromDense(std::move(W), options.keepDoublePrecision);
+  rep.totalSeconds = since(t0);
+  BindStats& st = e.stats();
+  st.seconds = rep.totalSeconds;
+  st.threads = threads;
+  st.minWeight = rep.minWeight;
+  st.maxWeight = maxWeight;
+  st.negativeCount = negatives;
+  st.maxSumError = rep.maxSumError;
+  st.maxLinearError = rep.maxLinearError;
+  st.unprunedLinearError = rep.maxLinearError;
+  if (reportOut) *reportOut = rep;
+  return e;
+}
+
+}  // namespace sb::cage

@@ -1,0 +1,74 @@
+// Harmonic coordinates (Joshi et al. 2007, "Harmonic coordinates for character articulation"; the
+// weights of Blender's Mesh Deform): for each cage vertex j the function w_j that is harmonic
+// (Δw_j = 0) inside the cage and equals the piecewise-linear hat function of vertex j on the
+// cage's surface. Unlike mean value coordinates they are non-negative and follow the interior of
+// a non-convex cage: a vertex has (almost) no influence across a gap of the cage.
+//
+// Solved numerically on a regular grid (method, boundary handling and accuracy in README.md):
+// the result converges to the true coordinates like O(cell size).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "sim/cage/embedding.h"
+#include "sim/mesh/triangle_mesh.h"
+
+namespace sb::cage {
+
+// Order in which the sparse LDLᵀ factorisation eliminates the grid's unknowns.
+enum class HarmonicOrdering {
+  NestedDissection,  // geometric nested dissection of the grid (default: least fill, fastest)
+  Amd,               // Eigen's approximate minimum degree
+};
+
+struct HarmonicOptions {
+  // Grid cells along the longest axis of the cage's bounding box (cubic cells), ≥ 4. The bind's
+  // error (linear precision, distance to the exact coordinates) is about one cell.
+  int resolution = 64;
+  // Threads for the solve and the lookup, at most threadCount() (0 = threadCount();
+  // sim/base/parallel.h). The weights do not depend on it.
+  int threads = 0;
+  // Memory the bind may take at most (bytes, estimated before anything is allocated: the grid,
+  // the right-hand sides and solutions of the interior nodes for every cage vertex, the
+  // factor, and the dense weights). A bind that would exceed it is refused with the figure
+  // (std::runtime_error).
+  std::uint64_t maxBytes = std::uint64_t(4) << 30;
+  HarmonicOrdering ordering = HarmonicOrdering::NestedDissection;
+  bool keepDoublePrecision = true;  // keep the double weights in the Embedding (deformDouble)
+};
+
+// Figures of a harmonic bind (the common ones are also in the Embedding's BindStats).
+struct HarmonicReport {
+  std::array<int, 3> gridNodes{};   // nodes along x, y, z (cells + 1 + 2 margin cells)
+  double cellSize = 0.0;            // grid spacing h (the cage's units)
+  std::int64_t interiorNodes = 0;   // unknowns of the Laplace system (inside, farther than h)
+  std::int64_t boundaryNodes = 0;   // nodes given the boundary values (within √3·h of the cage)
+  std::int64_t factorNonZeros = 0;  // non-zeros of the LDLᵀ factor L
+  double classifySeconds = 0.0;     // distances and inside/outside of the nodes
+  double factorSeconds = 0.0;       // assembly + sparse LDLᵀ factorisation (AMD ordering)
+  double solveSeconds = 0.0;        // the solves for all cage vertices
+  double lookupSeconds = 0.0;       // trilinear lookup of the points
+  double totalSeconds = 0.0;
+  // Points whose grid cell lacks values at some corner (outside the cage, more than a cell
+  // away, or beyond the grid): given the hat functions of their closest cage point.
+  std::int64_t closestPointPoints = 0;
+  double maxSumError = 0.0;     // max_i |Σ_j w_ij − 1|
+  double minWeight = 0.0;       // min_ij w_ij (≥ 0 up to solver round-off)
+  double maxLinearError = 0.0;  // max_i |Σ_j w_ij v_j − x_i| / cage diagonal
+};
+
+// Validates the cage (closed, 2-manifold, outward: throws mesh::SurfaceError naming the
+// problem), the points (finite: std::invalid_argument naming the point) and the options
+// (resolution: std::invalid_argument; memory: std::runtime_error with the estimate), then
+// returns the dense embedding W (#points × #cage vertices, rows summing to 1) of harmonic
+// coordinates. Points inside the cage get the trilinear interpolation of the grid solution;
+// points outside it are described in README.md ("Harmonic coordinates"). Nothing is returned
+// half-built: every check happens before the work.
+Embedding bindHarmonic(const std::vector<Eigen::Vector3d>& points, const mesh::TriangleMesh& cage,
+                       const HarmonicOptions& options = {}, HarmonicReport* report = nullptr);
+
+}  // namespace sb::cage

@@ -1,0 +1,307 @@
+// Harmonic coordinates (sim/cage/harmonic.h). Oracles independent of the solver: barycentric
+// coordinates of a tetrahedron (linear on the boundary and harmonic, so they are the exact
+// harmonic coordinates), linear precision, the discrete maximum principle, locality across the
+// gap of a U-shaped cage compared with mean value coordinates.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "sim/cage/embedding.h"
+#include "sim/cage/harmonic.h"
+#include "sim/cage/interior_points.h"
+#include "sim/mesh/closed_surface.h"
+#include "sim/mesh/mesh_io.h"
+#include "tests/mesh/mesh_fixtures.h"
+
+namespace sb::cage {
+namespace {
+
+using Vec3 = Eigen::Vector3d;
+using mesh::TriangleMesh;
+
+TriangleMesh tetrahedron() {
+  TriangleMesh m;
+  m.vertices = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)};
+  m.triangles = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+  return m;
+}
+
+// A U-shaped prism, z in [0, 1]: the outline (0,0) (5,0) (5,4) (3,4) (3,1) (2,1) (2,4) (0,4),
+// two prongs 2 wide and 3 long either side of a gap 1 wide. Caps triangulated by hand.
+TriangleMesh uShape() {
+  const double poly[8][2] = {{0, 0}, {5, 0}, {5, 4}, {3, 4}, {3, 1}, {2, 1}, {2, 4}, {0, 4}};
+  TriangleMesh m;
+  for (int z = 0; z < 2; ++z)
+    for (const auto& p : poly) m.vertices.emplace_back(p[0], p[1], double(z));
+  // Bottom-cap triangles, counter-clockwise seen from +z (the top cap); the bottom uses them
+  // reversed.
+  const int cap[6][3] = {{0, 1, 4}, {0, 4, 5}, {1, 2, 3}, {1, 3, 4}, {0, 5, 6}, {0, 6, 7}};
+  for (const auto& t : cap) {
+    m.triangles.push_back({8 + t[0], 8 + t[1], 8 + t[2]});
+    m.triangles.push_back({t[0], t[2], t[1]});
+  }
+  for (int i = 0; i < 8; ++i) {
+    const int j = (i + 1) % 8;
+    m.triangles.push_back({i, j, 8 + j});
+    m.triangles.push_back({i, 8 + j, 8 + i});
+  }
+  return m;
+}
+
+std::vector<Vec3> randomTetPoints(int count, double minBary, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  std::vector<Vec3> out;
+  while (static_cast<int>(out.size()) < count) {
+    const Vec3 p(U(rng), U(rng), U(rng));
+    if (p.minCoeff() >= minBary && 1.0 - p.sum() >= minBary) out.push_back(p);
+  }
+  return out;
+}
+
+TriangleMesh bunnyCage() {
+  return mesh::readMesh(std::string(SOFTBODY_TEST_MESH_DIR) + "/bunny_cage.obj");
+}
+
+Eigen::Matrix<double, Eigen::Dynamic, 3> cageMatrix(const TriangleMesh& cage) {
+  Eigen::Matrix<double, Eigen::Dynamic, 3> c(cage.vertices.size(), 3);
+  for (std::size_t j = 0; j < cage.vertices.size(); ++j)
+    c.row(Eigen::Index(j)) = cage.vertices[j].transpose();
+  return c;
+}
+
+// Max over the points of |w − λ| (λ: barycentric coordinates of the tetrahedron).
+double tetError(const Embedding& e, const std::vector<Vec3>& points) {
+  double worst = 0.0;
+  std::vector<std::pair<int, double>> row;
+  for (int i = 0; i < static_cast<int>(points.size()); ++i) {
+    const Vec3& p = points[size_t(i)];
+    const double lambda[4] = {1.0 - p.sum(), p.x(), p.y(), p.z()};
+    double w[4] = {0, 0, 0, 0};
+    e.rowWeights(i, row);
+    for (const auto& [j, v] : row) w[j] = v;
+    for (int j = 0; j < 4; ++j) worst = std::max(worst, std::abs(w[j] - lambda[j]));
+  }
+  return worst;
+}
+
+// Tetrahedron: its barycentric coordinates are linear (so harmonic) and equal the hat functions
+// on its faces, so they are its harmonic coordinates. The grid solution's error comes from the
+// boundary values taken at the closest cage point instead of at the node (O(h)), and must fall
+// with the cell size.
+TEST(Harmonic, TetrahedronGivesBarycentricCoordinatesConvergingWithResolution) {
+  const TriangleMesh cage = tetrahedron();
+  const auto points = randomTetPoints(300, 0.05, 1);
+  double previous = std::numeric_limits<double>::infinity();
+  // Measured 0.0625, 0.0309, 0.0153 at 16, 32, 64 (first order: the error halves with h).
+  for (int res : {12, 24, 48}) {
+    HarmonicOptions o;
+    o.resolution = res;
+    const double err = tetError(bindHarmonic(points, cage, o), points);
+    std::printf("tetrahedron res %d: max |w - barycentric| = %.3g, order %.2f\n", res, err,
+                std::log2(previous / err));
+    EXPECT_LT(err, 0.6 * previous) << "resolution " << res;
+    previous = err;
+  }
+  EXPECT_LT(previous, 0.025);
+}
+
+// Σw = 1, w ≥ 0 and linear precision on the bunny cage at points inside it; linear precision
+// improves under refinement.
+TEST(Harmonic, BunnyCagePartitionOfUnityPositivityAndLinearPrecisionConverge) {
+  const TriangleMesh cage = bunnyCage();
+  const auto points = interiorLattice(cage, 0.02 * mesh::testing::diagonal(cage));
+  ASSERT_GT(points.size(), 500u);
+  const auto C = cageMatrix(cage);
+  double previous = std::numeric_limits<double>::infinity();
+  // Measured linear error 0.037, 0.016, 0.0088 (of the diagonal) at 16, 32, 64: first order.
+  for (int res : {8, 16, 32}) {
+    HarmonicOptions o;
+    o.resolution = res;
+    HarmonicReport r;
+    const Embedding e = bindHarmonic(points, cage, o, &r);
+    ASSERT_EQ(e.meshVertexCount(), static_cast<int>(points.size()));
+    ASSERT_EQ(e.cageVertexCount(), static_cast<int>(cage.vertices.size()));
+    std::vector<std::pair<int, double>> row;
+    double sumErr = 0.0, minW = 1.0, linErr = 0.0;
+    for (int i = 0; i < e.meshVertexCount(); ++i) {
+      e.rowWeights(i, row);
+      double s = 0.0;
+      Vec3 x = Vec3::Zero();
+      for (const auto& [j, w] : row) {
+        s += w;
+        minW = std::min(minW, w);
+        x += w * C.row(j).transpose();
+      }
+      sumErr = std::max(sumErr, std::abs(s - 1.0));
+      linErr = std::max(linErr, (x - points[size_t(i)]).norm());
+    }
+    linErr /= mesh::testing::diagonal(cage);
+    std::printf(
+        "bunny res %d: unknowns %lld, sum err %.3g, min w %.3g, linear err %.3g, order %.2f\n", res,
+        static_cast<long long>(r.interiorNodes), sumErr, minW, linErr,
+        std::log2(previous / linErr));
+    EXPECT_LT(sumErr, 1e-9);
+    // The discrete maximum principle makes the grid values ≥ 0 exactly; what is left is the
+    // round-off of the solve (~1e-16 relative to the values ≤ 1, times a small growth factor).
+    EXPECT_GE(minW, -1e-12);
+    EXPECT_NEAR(r.maxLinearError, linErr, 1e-12);
+    EXPECT_NEAR(e.stats().maxLinearError, linErr, 1e-12);
+    EXPECT_LT(linErr, 0.6 * previous) << "resolution " << res;
+    previous = linErr;
+  }
+}
+
+// Across the gap of a U: a vertex at the tip of one prong has next to no influence on a point in
+// the tip of the other prong (the harmonic function must go around through the base), while
+// mean value coordinates, which see straight across the gap, give it a clear weight.
+TEST(Harmonic, UShapeLocalityAcrossTheGapUnlikeMeanValueCoordinates) {
+  const TriangleMesh cage = uShape();
+  ASSERT_NO_THROW(mesh::validateClosedSurface(cage, "U"));
+  const std::vector<Vec3> points = {Vec3(4.0, 3.5, 0.5), Vec3(3.5, 3.0, 0.5)};
+  HarmonicOptions o;
+  o.resolution = 48;
+  const Embedding h = bindHarmonic(points, cage, o);
+  const Embedding mvc = bindMeanValue(points, cage);
+  // Left prong tip vertices: (2,4) and (0,4) at z = 0 and 1: indices 6, 7, 14, 15.
+  for (int i = 0; i < 2; ++i) {
+    std::vector<std::pair<int, double>> rh, rm;
+    h.rowWeights(i, rh);
+    mvc.rowWeights(i, rm);
+    double farH = 0.0, farM = 0.0;
+    for (const auto& [j, w] : rh)
+      if (j % 8 == 6 || j % 8 == 7) farH += std::abs(w);
+    for (const auto& [j, w] : rm)
+      if (j % 8 == 6 || j % 8 == 7) farM += std::abs(w);
+    std::printf("U point %d: harmonic far weight %.3g, MVC %.3g\n", i, farH, farM);
+    EXPECT_LT(farH, 0.01);
+    EXPECT_GT(farM, 10.0 * farH);
+  }
+}
+
+// The embedding deforms like any other: a translated cage moves the points by the translation,
+// here including points outside the cage (closest-point weights, also summing to 1).
+TEST(Harmonic, TranslationMovesPointsByIt) {
+  const TriangleMesh cage = mesh::testing::makeBox(2, 2, 2);
+  std::vector<Vec3> points;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> U(-0.5, 1.5);
+  for (int i = 0; i < 200; ++i) points.emplace_back(U(rng), U(rng), U(rng));
+  HarmonicOptions o;
+  o.resolution = 16;
+  HarmonicReport r;
+  const Embedding e = bindHarmonic(points, cage, o, &r);
+  EXPECT_GT(r.closestPointPoints, 0);
+  EXPECT_LT(r.maxSumError, 1e-9);  // outside points too
+  EXPECT_GE(r.minWeight, -1e-12);
+  const Vec3 t(0.3, -1.7, 2.5);
+  Eigen::Matrix<double, Eigen::Dynamic, 3> moved = cageMatrix(cage);
+  moved.rowwise() += t.transpose();
+  Eigen::Matrix<double, Eigen::Dynamic, 3> rest, out;
+  e.deformDouble(cageMatrix(cage), rest);
+  e.deformDouble(moved, out);
+  for (int i = 0; i < e.meshVertexCount(); ++i)
+    EXPECT_LT((out.row(i) - rest.row(i) - t.transpose()).norm(), 1e-9) << "point " << i;
+}
+
+TEST(Harmonic, ThreadCountDoesNotChangeTheWeights) {
+  const TriangleMesh cage = tetrahedron();
+  const auto points = randomTetPoints(50, 0.0, 2);
+  HarmonicOptions o;
+  o.resolution = 16;
+  o.threads = 1;
+  const Embedding a = bindHarmonic(points, cage, o);
+  o.threads = 2;
+  const Embedding b = bindHarmonic(points, cage, o);
+  std::vector<std::pair<int, double>> ra, rb;
+  for (int i = 0; i < a.meshVertexCount(); ++i) {
+    a.rowWeights(i, ra);
+    b.rowWeights(i, rb);
+    EXPECT_EQ(ra, rb) << "point " << i;
+  }
+}
+
+// The nested-dissection numbering of the unknowns only reorders the same system: the weights
+// must match those of Eigen's AMD ordering (to round-off), and the grid must be solved at all
+// (both far from the tetrahedron's barycentric coordinates would be a bug in both).
+TEST(Harmonic, NestedDissectionAndAmdOrderingsGiveTheSameWeights) {
+  const TriangleMesh cage = bunnyCage();
+  const auto points = interiorLattice(cage, 0.05 * mesh::testing::diagonal(cage));
+  HarmonicOptions o;
+  o.resolution = 24;
+  HarmonicReport rn, ra;
+  const Embedding nd = bindHarmonic(points, cage, o, &rn);
+  o.ordering = HarmonicOrdering::Amd;
+  const Embedding amd = bindHarmonic(points, cage, o, &ra);
+  EXPECT_EQ(rn.interiorNodes, ra.interiorNodes);
+  EXPECT_GT(rn.interiorNodes, 1000);
+  std::vector<std::pair<int, double>> a, b;
+  double worst = 0.0;
+  for (int i = 0; i < nd.meshVertexCount(); ++i) {
+    nd.rowWeights(i, a);
+    amd.rowWeights(i, b);
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t k = 0; k < a.size(); ++k)
+      worst = std::max(worst, std::abs(a[k].second - b[k].second));
+  }
+  EXPECT_LT(worst, 1e-12);
+}
+
+std::string messageOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "(no exception)";
+}
+
+TEST(Harmonic, RefusesBadInputWithAClearMessage) {
+  const TriangleMesh good = tetrahedron();
+  const std::vector<Vec3> points = {Vec3(0.2, 0.2, 0.2)};
+
+  TriangleMesh open = mesh::testing::makeBox(1, 1, 1);
+  open.triangles.pop_back();
+  EXPECT_THROW(bindHarmonic(points, open), mesh::SurfaceError);
+  EXPECT_NE(messageOf([&] { bindHarmonic(points, open); }).find("cage: not closed"),
+            std::string::npos);
+
+  TriangleMesh inverted = good;
+  for (auto& t : inverted.triangles) std::swap(t[1], t[2]);
+  EXPECT_THROW(bindHarmonic(points, inverted), mesh::SurfaceError);
+  EXPECT_NE(messageOf([&] { bindHarmonic(points, inverted); }).find("cage:"), std::string::npos);
+
+  // Two tetrahedra sharing a vertex (the second is the first reflected through vertex 0, which
+  // reverses orientation, so its triangles are flipped back): a non-manifold vertex.
+  TriangleMesh pinched = good;
+  for (int k = 1; k < 4; ++k) pinched.vertices.push_back(-good.vertices[size_t(k)]);
+  for (const auto& t : good.triangles) {
+    auto map = [](int v) { return v == 0 ? 0 : v + 3; };
+    pinched.triangles.push_back({map(t[0]), map(t[2]), map(t[1])});
+  }
+  EXPECT_THROW(bindHarmonic(points, pinched), mesh::SurfaceError);
+  EXPECT_EQ(messageOf([&] { bindHarmonic(points, pinched); }).rfind("cage: ", 0), 0u);
+
+  HarmonicOptions o;
+  o.resolution = 3;
+  EXPECT_NE(messageOf([&] { bindHarmonic(points, good, o); }).find("resolution must be at least 4"),
+            std::string::npos);
+  o.resolution = 100000;
+  const std::string big = messageOf([&] { bindHarmonic(points, good, o); });
+  EXPECT_NE(big.find("need about"), std::string::npos) << big;
+  EXPECT_NE(big.find("allowed"), std::string::npos) << big;
+  EXPECT_THROW(bindHarmonic(points, good, o), std::runtime_error);
+
+  std::vector<Vec3> bad = {Vec3(0.1, 0.1, 0.1), Vec3(0.2, std::nan(""), 0.1)};
+  EXPECT_NE(messageOf([&] { bindHarmonic(bad, good); }).find("point 1 is not finite"),
+            std::string::npos);
+  EXPECT_THROW(bindHarmonic(bad, good), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace sb::cage
