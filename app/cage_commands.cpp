@@ -1,6 +1,6 @@
-// softbody bind / softbody deform / softbody cage: bind a mesh to a cage with mean value
-// coordinates, report the weight statistics, write a mesh deformed by a moved cage, and make an
-// automatic cage for any mesh.
+// softbody bind / softbody deform / softbody cage: bind a mesh to a cage (mean value, harmonic or
+// RBF coordinates: sim/cage/bind.h), report the weight statistics, write a mesh deformed by a moved
+// cage, and make an automatic cage for any mesh.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -15,6 +15,7 @@
 #include "app/commands.h"
 #include "sim/base/parallel.h"
 #include "sim/cage/auto_cage.h"
+#include "sim/cage/bind.h"
 #include "sim/cage/embedding.h"
 #include "sim/mesh/closed_surface.h"
 #include "sim/mesh/mesh_io.h"
@@ -74,8 +75,33 @@ BindOptions makeOptions(const std::string& cacheDir, int threads, const std::str
   return o;
 }
 
+// --method and its options, shared by bind and deform.
+struct MethodArgs {
+  std::string method = "mvc";
+  int resolution = cage::HarmonicOptions{}.resolution;
+  double shape = cage::RbfOptions{}.shape;
+
+  cage::EmbeddingMethod toMethod() const {
+    cage::EmbeddingMethod m;
+    cage::parseEmbeddingKind(method, &m.kind);  // checked by IsMember below
+    m.harmonic.resolution = resolution;
+    m.rbf.shape = shape;
+    return m;
+  }
+};
+
 void addCommonOptions(CLI::App& app, std::string& cacheDir, int& threads, std::string& storage,
-                      double& prune) {
+                      double& prune, MethodArgs& method) {
+  app.add_option("--method", method.method,
+                 "Coordinates: mvc (mean value), harmonic (Laplace solve on a grid) or rbf "
+                 "(multiquadric, handles at the cage vertices)")
+      ->check(CLI::IsMember({"mvc", "harmonic", "rbf"}));
+  app.add_option("--resolution", method.resolution,
+                 "harmonic: grid cells along the cage's longest side")
+      ->check(CLI::Range(4, 512));
+  app.add_option("--shape", method.shape,
+                 "rbf: multiquadric shape s / mean nearest-handle distance")
+      ->check(CLI::Range(0.0, 10.0));
   app.add_option("--cache-dir", cacheDir,
                  "Directory for cached binds (reused when mesh, cage and options match)");
   app.add_option("--threads", threads, "Threads for the bind (0 = all cores)")
@@ -90,8 +116,7 @@ void addCommonOptions(CLI::App& app, std::string& cacheDir, int& threads, std::s
 }  // namespace
 
 int runBindCommand(int argc, char** argv) {
-  CLI::App app{"Bind a mesh to a cage with mean value coordinates and report weight statistics",
-               "bind"};
+  CLI::App app{"Bind a mesh to a cage and report weight statistics", "bind"};
   std::string meshPath, cagePath, outPath, cacheDir, storage = "auto";
   int threads = 0;
   double prune = BindOptions{}.pruneThreshold;
@@ -100,7 +125,8 @@ int runBindCommand(int argc, char** argv) {
   app.add_option("--cage", cagePath, "Closed, outward-oriented cage mesh")->required();
   app.add_option("--out", outPath,
                  "Write the weight matrix (binary .sbw file, see sim/cage/README.md)");
-  addCommonOptions(app, cacheDir, threads, storage, prune);
+  MethodArgs method;
+  addCommonOptions(app, cacheDir, threads, storage, prune, method);
   if (const int rc = parse(app, argc, argv); rc >= 0) return rc;
 
   try {
@@ -113,8 +139,9 @@ int runBindCommand(int argc, char** argv) {
       return 1;
     }
     const BindOptions options = makeOptions(cacheDir, threads, storage, prune, true);
-    const Embedding emb = cage::bindMeanValue(mesh.vertices, cageMesh, options);
+    const Embedding emb = cage::bindToCage(mesh.vertices, cageMesh, method.toMethod(), options);
     const cage::BindStats& s = emb.stats();
+    std::printf("method:             %s\n", cage::embeddingKindName(emb.kind()));
     std::printf("mesh:               %s (%d vertices)\n", meshPath.c_str(), emb.meshVertexCount());
     std::printf("cage:               %s (%d vertices, %zu triangles)\n", cagePath.c_str(),
                 emb.cageVertexCount(), cageMesh.triangles.size());
@@ -134,11 +161,12 @@ int runBindCommand(int argc, char** argv) {
     if (emb.isSparse())
       std::printf("pruning:            rest-pose error %.3g, max row L1 change %.3g\n",
                   s.pruningError, s.maxPrunedL1);
-    std::printf(
-        "conditioning:       %.3g (worst cancellation factor), %lld points beyond 4x cage size, "
-        "%lld on the cage\n",
-        s.worstConditioning, static_cast<long long>(s.farPoints),
-        static_cast<long long>(s.onCagePoints));
+    if (emb.kind() == cage::EmbeddingKind::MeanValue)
+      std::printf(
+          "conditioning:       %.3g (worst cancellation factor), %lld points beyond 4x cage size, "
+          "%lld on the cage\n",
+          s.worstConditioning, static_cast<long long>(s.farPoints),
+          static_cast<long long>(s.onCagePoints));
     if (!outPath.empty()) {
       emb.save(outPath);
       std::printf("wrote:              %s\n", outPath.c_str());
@@ -165,7 +193,8 @@ int runDeformCommand(int argc, char** argv) {
                  "The same cage, moved (same vertex count and faces)")
       ->required();
   app.add_option("--out", outPath, "Output OBJ")->required();
-  addCommonOptions(app, cacheDir, threads, storage, prune);
+  MethodArgs method;
+  addCommonOptions(app, cacheDir, threads, storage, prune, method);
   if (const int rc = parse(app, argc, argv); rc >= 0) return rc;
 
   try {
@@ -196,7 +225,7 @@ int runDeformCommand(int argc, char** argv) {
     }
     const BindOptions options =
         makeOptions(cacheDir, threads, storage, prune, mesh.vertices.size() > 20000);
-    const Embedding emb = cage::bindMeanValue(mesh.vertices, rest, options);
+    const Embedding emb = cage::bindToCage(mesh.vertices, rest, method.toMethod(), options);
     PointsRowMajor cagePos(static_cast<Eigen::Index>(moved.vertices.size()), 3);
     Eigen::Matrix<double, Eigen::Dynamic, 3> cageD(static_cast<Eigen::Index>(moved.vertices.size()),
                                                    3);

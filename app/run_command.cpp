@@ -9,6 +9,7 @@
 
 #include "app/commands.h"
 #include "sim/base/parallel.h"
+#include "sim/scene/fold_watch.h"
 #include "sim/scene/frame_export.h"
 #include "sim/scene/gltf_take.h"
 #include "sim/scene/point_cache.h"
@@ -110,6 +111,7 @@ int runHeadlessCommand(int argc, char** argv) {
   int threads = 0;
   bool noDeform = false;
   int monitor = 0;
+  bool foldCheck = false;
   cli.add_option("scene", scenePath, "Scene file (JSON)")->required();
   cli.add_option("--steps", steps, "Number of steps to run (≥ 1)")
       ->required()
@@ -147,6 +149,10 @@ int runHeadlessCommand(int argc, char** argv) {
                  "Every K steps print the time, kinetic energy, fastest particle, largest "
                  "growth of a body and contacts (to watch a run settle)")
       ->check(CLI::Range(1, 100000000));
+  cli.add_flag("--fold-check", foldCheck,
+               "After every exported step (--every), check each render mesh's map for folds "
+               "(det J <= 0 inside the cage, sim/cage/fold_check.h); report the first step at "
+               "which each body folds");
   cli.add_flag("--no-deform", noDeform,
                "Do not update the render meshes each step (by default they follow the "
                "particles every step, as in the viewer)");
@@ -252,6 +258,36 @@ int runHeadlessCommand(int argc, char** argv) {
     return 1;
   }
 
+  std::unique_ptr<FoldWatch> folds;
+  std::vector<char> foldedBefore(scene.bodies.size(), 0);
+  int foldSteps = 0;
+  if (foldCheck) {
+    try {
+      folds = std::make_unique<FoldWatch>(scene);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "softbody run: --fold-check: %s\n", e.what());
+      return 1;
+    }
+    if (folds->watchedBodies() == 0) {
+      std::fprintf(stderr, "softbody run: --fold-check: %s has no render meshes to check\n",
+                   scenePath.c_str());
+      return 1;
+    }
+  }
+  // Reports a body's first fold, and counts the checked steps with any fold.
+  auto checkFolds = [&](int step) {
+    const std::vector<FoldWatch::BodyFolds> now = folds->folded(scene);
+    if (!now.empty()) ++foldSteps;
+    for (const FoldWatch::BodyFolds& f : now) {
+      if (foldedBefore[size_t(f.body)]) continue;
+      foldedBefore[size_t(f.body)] = 1;
+      std::printf(
+          "fold: step %d (t %.4f s): body '%s' folds at %d of %d samples (min det J %.3g)\n", step,
+          scene.world.time(), scene.world.name(scene.bodies[size_t(f.body)].handle).c_str(),
+          f.report.folded, f.report.samples, f.report.minDeterminant);
+    }
+  };
+
   RunMonitor watch(scene.world);
   int exported = 0;
   for (int s = 1; s <= steps; ++s) {
@@ -267,6 +303,7 @@ int runHeadlessCommand(int argc, char** argv) {
           ++exported;
         }
         if (renderExport) exportRenderFrame(s);
+        if (folds) checkFolds(s);
       } catch (const std::exception& e) {
         std::fprintf(stderr, "softbody run: %s\n", e.what());
         return 1;
@@ -280,6 +317,9 @@ int runHeadlessCommand(int argc, char** argv) {
                 scene.world.name(b.handle).c_str(), c.x(), c.y(), c.z());
   }
   if (!exportDir.empty()) std::printf("exported %d frames to %s\n", exported, exportDir.c_str());
+  if (folds)
+    std::printf("fold check: %d of %d checked steps had a fold (%d bodies watched)\n", foldSteps,
+                steps / every, folds->watchedBodies());
   try {
     for (auto& cache : caches) cache->finish();
     if (gltf) gltf->finish();

@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "sim/base/parallel.h"
+#include "sim/cage/bind.h"
 #include "sim/cage/embedding.h"
 #include "sim/mesh/closed_surface.h"
 #include "sim/mesh/mesh_io.h"
@@ -589,8 +590,12 @@ PYBIND11_MODULE(softbody, m) {
       "path"_a, "Reads OBJ, OFF, PLY or STL: (vertices (V, 3) float64, triangles (T, 3) int32).");
 
   py::class_<cage::Embedding>(m, "Embedding",
-                              "A mesh bound to a cage: mesh = W · cage (mean value coordinates).")
+                              "A mesh bound to a cage: mesh = W · cage (mean value, harmonic or "
+                              "RBF coordinates).")
       .def_property_readonly("mesh_vertex_count", &cage::Embedding::meshVertexCount)
+      .def_property_readonly(
+          "method", [](const cage::Embedding& e) { return cage::embeddingKindName(e.kind()); },
+          "'mvc', 'harmonic' or 'rbf'")
       .def_property_readonly("cage_vertex_count", &cage::Embedding::cageVertexCount)
       .def(
           "deform",
@@ -605,16 +610,29 @@ PYBIND11_MODULE(softbody, m) {
           "cage_positions"_a, "Mesh positions (V, 3) float32 for cage positions (C, 3).");
   m.def(
       "bind",
-      [](const py::object& points, const py::object& cageVertices,
-         const py::object& cageTriangles) {
+      [](const py::object& points, const py::object& cageVertices, const py::object& cageTriangles,
+         const std::string& method, int resolution, double shape) {
+        cage::EmbeddingMethod how;
+        if (!cage::parseEmbeddingKind(method, &how.kind) ||
+            how.kind == cage::EmbeddingKind::FfdBernstein ||
+            how.kind == cage::EmbeddingKind::FfdBSpline)
+          throw py::value_error("method must be 'mvc', 'harmonic' or 'rbf', got '" + method + "'");
+        if (resolution < 4 || resolution > 256)
+          throw py::value_error("resolution must be in [4, 256], got " +
+                                std::to_string(resolution));
+        how.harmonic.resolution = resolution;
+        how.rbf.shape = shape;  // bindRbf checks its range
         mesh::TriangleMesh cageMesh;
         cageMesh.vertices = vec3List(pointsArgument(cageVertices, -1, "cage_vertices"));
         cageMesh.triangles = trianglesArgument(cageTriangles, "cage_triangles");
         const std::vector<Vec3> p = vec3List(pointsArgument(points, -1, "points"));
         py::gil_scoped_release release;
-        return cage::bindMeanValue(p, cageMesh, {});
+        return cage::bindToCage(p, cageMesh, how);
       },
-      "points"_a, "cage_vertices"_a, "cage_triangles"_a,
-      "Mean value coordinates of points (V, 3) in a closed cage; ValueError for an open or "
-      "inverted cage.");
+      "points"_a, "cage_vertices"_a, "cage_triangles"_a, "method"_a = "mvc",
+      "resolution"_a = cage::HarmonicOptions{}.resolution, "shape"_a = cage::RbfOptions{}.shape,
+      "Coordinates of points (V, 3) in a closed cage: method 'mvc' (mean value), 'harmonic' "
+      "(grid of `resolution` cells along the cage's longest side, in [4, 256]) or 'rbf' "
+      "(multiquadric, shape in [0, 10]); ValueError for an open or inverted cage or a bad "
+      "option.");
 }

@@ -19,7 +19,8 @@ namespace {
 using Vec3 = Eigen::Vector3d;
 
 constexpr char kMagic[8] = {'S', 'B', 'M', 'V', 'C', 'W', '0', '1'};
-constexpr std::uint64_t kFormatVersion = 1;
+// 2: the embedding's kind after the storage flag (EmbeddingKind).
+constexpr std::uint64_t kFormatVersion = 2;
 
 std::uint64_t checksum(const std::string& data) {
   Hasher h(0x5EEDu);
@@ -156,6 +157,7 @@ void Embedding::save(const std::string& path, const std::array<std::uint64_t, 2>
   put(data, static_cast<std::int64_t>(rows_));
   put(data, static_cast<std::int64_t>(cols_));
   put(data, static_cast<std::uint64_t>(sparse_ ? 1 : 0));
+  put(data, static_cast<std::uint64_t>(kind_));
   const auto st = statsToList(stats_);
   put(data, static_cast<std::uint64_t>(st.size()));
   for (double v : st) put(data, v);
@@ -210,8 +212,11 @@ Embedding Embedding::fromBytes(const std::string& data, const std::string& path,
   const auto rows = rd.get<std::int64_t>();
   const auto cols = rd.get<std::int64_t>();
   const auto sparse = rd.get<std::uint64_t>();
+  const auto kind = rd.get<std::uint64_t>();
   if (rows < 0 || cols <= 0 || rows > (1 << 30) || cols > (1 << 30) || sparse > 1)
     throw std::runtime_error(path + ": bad header");
+  if (kind >= kEmbeddingKindCount)
+    throw std::runtime_error(path + ": unknown embedding kind " + std::to_string(kind));
   const auto nstats = rd.get<std::uint64_t>();
   if (nstats != kStatsCount) throw std::runtime_error(path + ": bad statistics block");
   std::vector<double> st(nstats);
@@ -272,6 +277,7 @@ Embedding Embedding::fromBytes(const std::string& data, const std::string& path,
     if (!W.allFinite()) throw std::runtime_error(path + ": non-finite weight");
     e = fromDense(std::move(W));
   }
+  e.kind_ = static_cast<EmbeddingKind>(kind);
   e.stats_ = checkedStats(st, rows, cols, path);
   checkRowSums(e, path);
   return e;

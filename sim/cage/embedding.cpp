@@ -260,33 +260,15 @@ Embedding bindMeanValue(const std::vector<Vec3>& points, const TriangleMesh& cag
     if (!points[i].allFinite())
       throw std::invalid_argument("bind: point " + std::to_string(i) + " is not finite");
   }
-  auto warn = [&](const std::string& msg) {
-    if (options.warning)
-      options.warning(msg);
-    else
-      std::cerr << "warning: " << msg << "\n";
-  };
-
   std::array<std::uint64_t, 2> key{};
   std::string cachePath;
   if (!options.cacheDir.empty()) {
     key = bindCacheKey(points, cage, options);
     cachePath = bindCachePath(options.cacheDir, key);
-    struct stat sb;
-    if (::stat(cachePath.c_str(), &sb) == 0) {
-      try {
-        std::array<std::uint64_t, 2> stored{};
-        Embedding e = Embedding::load(cachePath, &stored);
-        if (stored != key || e.meshVertexCount() != static_cast<int>(points.size()) ||
-            e.cageVertexCount() != static_cast<int>(cage.vertices.size()))
-          throw std::runtime_error(cachePath + ": key or size mismatch");
-        e.stats().fromCache = true;
-        e.stats().seconds = 0.0;
-        return e;
-      } catch (const std::exception& ex) {
-        warn(std::string("ignoring bind cache: ") + ex.what() + "; binding again");
-      }
-    }
+    if (std::optional<Embedding> cached =
+            loadCachedBind(cachePath, key, EmbeddingKind::MeanValue, int(points.size()),
+                           int(cage.vertices.size()), options))
+      return std::move(*cached);
   }
 
   const auto t0 = std::chrono::steady_clock::now();
@@ -445,14 +427,111 @@ Embedding bindMeanValue(const std::vector<Vec3>& points, const TriangleMesh& cag
   }
   if (n == 0) st.minWeight = st.maxWeight = 0.0;
 
-  if (!cachePath.empty()) {
-    try {
-      e.save(cachePath, key);
-    } catch (const std::exception& ex) {
-      warn(std::string("could not write bind cache: ") + ex.what());
+  if (!cachePath.empty()) saveCachedBind(e, cachePath, key, options);
+  return e;
+}
+
+namespace {
+void warnOf(const BindOptions& options, const std::string& msg) {
+  if (options.warning)
+    options.warning(msg);
+  else
+    std::cerr << "warning: " << msg << "\n";
+}
+}  // namespace
+
+std::optional<Embedding> loadCachedBind(const std::string& path,
+                                        const std::array<std::uint64_t, 2>& key, EmbeddingKind kind,
+                                        int rows, int cols, const BindOptions& options) {
+  struct stat sb;
+  if (::stat(path.c_str(), &sb) != 0) return std::nullopt;
+  try {
+    std::array<std::uint64_t, 2> stored{};
+    Embedding e = Embedding::load(path, &stored);
+    if (stored != key || e.kind() != kind || e.meshVertexCount() != rows ||
+        e.cageVertexCount() != cols)
+      throw std::runtime_error(path + ": key, kind or size mismatch");
+    e.stats().fromCache = true;
+    e.stats().seconds = 0.0;
+    return e;
+  } catch (const std::exception& ex) {
+    warnOf(options, std::string("ignoring bind cache: ") + ex.what() + "; binding again");
+  }
+  return std::nullopt;
+}
+
+void saveCachedBind(const Embedding& e, const std::string& path,
+                    const std::array<std::uint64_t, 2>& key, const BindOptions& options) {
+  try {
+    e.save(path, key);
+  } catch (const std::exception& ex) {
+    warnOf(options, std::string("could not write bind cache: ") + ex.what());
+  }
+}
+
+void measureWeights(Embedding& e, const std::vector<Vec3>& points,
+                    const std::vector<Vec3>& controls) {
+  const int n = e.meshVertexCount();
+  if (static_cast<int>(points.size()) != n ||
+      static_cast<int>(controls.size()) != e.cageVertexCount())
+    throw std::invalid_argument("measureWeights: " + std::to_string(points.size()) +
+                                " points and " + std::to_string(controls.size()) +
+                                " controls for a " + std::to_string(n) + " × " +
+                                std::to_string(e.cageVertexCount()) + " weight matrix");
+  Eigen::AlignedBox3d box;
+  for (const Vec3& c : controls) box.extend(c);
+  const double L = box.diagonal().norm() > 0.0 ? box.diagonal().norm() : 1.0;
+  BindStats& st = e.stats();
+  st.nonZeros = e.nonZeros();
+  st.minWeight = n > 0 ? std::numeric_limits<double>::infinity() : 0.0;
+  st.maxWeight = n > 0 ? -std::numeric_limits<double>::infinity() : 0.0;
+  st.negativeCount = 0;
+  st.maxSumError = st.maxLinearError = 0.0;
+  std::vector<std::pair<int, double>> row;
+  for (int i = 0; i < n; ++i) {
+    e.rowWeights(i, row);
+    double sum = 0.0;
+    Vec3 p = Vec3::Zero();
+    for (const auto& [j, wj] : row) {
+      if (!std::isfinite(wj))
+        throw std::runtime_error("bind: weight (" + std::to_string(i) + ", " + std::to_string(j) +
+                                 ") is not finite");
+      sum += wj;
+      p += wj * controls[size_t(j)];
+      st.minWeight = std::min(st.minWeight, wj);
+      st.maxWeight = std::max(st.maxWeight, wj);
+      if (wj < 0.0) ++st.negativeCount;
+    }
+    st.maxSumError = std::max(st.maxSumError, std::abs(sum - 1.0));
+    st.maxLinearError = std::max(st.maxLinearError, (p - points[size_t(i)]).norm() / L);
+  }
+  st.unprunedLinearError = st.maxLinearError;
+}
+
+const char* embeddingKindName(EmbeddingKind kind) {
+  switch (kind) {
+    case EmbeddingKind::MeanValue:
+      return "mvc";
+    case EmbeddingKind::Harmonic:
+      return "harmonic";
+    case EmbeddingKind::Rbf:
+      return "rbf";
+    case EmbeddingKind::FfdBernstein:
+      return "ffd-bernstein";
+    case EmbeddingKind::FfdBSpline:
+      return "ffd-bspline";
+  }
+  return "?";
+}
+
+bool parseEmbeddingKind(const std::string& name, EmbeddingKind* kind) {
+  for (int k = 0; k < kEmbeddingKindCount; ++k) {
+    if (name == embeddingKindName(static_cast<EmbeddingKind>(k))) {
+      *kind = static_cast<EmbeddingKind>(k);
+      return true;
     }
   }
-  return e;
+  return false;
 }
 
 }  // namespace sb::cage

@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -37,6 +38,21 @@ struct BindStats {
 };
 
 enum class WeightStorage { Auto, Dense, Sparse };
+
+// Which coordinates a weight matrix holds (metadata: every kind deforms the same way, W ·
+// controls). The numbers are stored in weight files; never renumber.
+enum class EmbeddingKind : std::uint8_t {
+  MeanValue = 0,     // mvc.h: cage vertices (bindMeanValue)
+  Harmonic = 1,      // harmonic.h: cage vertices
+  Rbf = 2,           // rbf.h: any handles (a cage's vertices, or points)
+  FfdBernstein = 3,  // ffd_lattice.h: lattice nodes
+  FfdBSpline = 4,    // ffd_lattice.h: lattice nodes
+};
+inline constexpr int kEmbeddingKindCount = 5;
+// "mvc", "harmonic", "rbf", "ffd-bernstein", "ffd-bspline": the names scenes and the CLI use.
+const char* embeddingKindName(EmbeddingKind kind);
+// The kind of a name above; false for anything else.
+bool parseEmbeddingKind(const std::string& name, EmbeddingKind* kind);
 
 struct BindOptions {
   int threads =
@@ -77,6 +93,10 @@ class Embedding {
   static Embedding fromDense(DenseD weights, bool keepDouble = true);
   static Embedding fromSparse(SparseD weights, bool keepDouble = true);
 
+  // What the weights are (set by the bind that made them; fromDense/fromSparse: MeanValue).
+  EmbeddingKind kind() const { return kind_; }
+  void setKind(EmbeddingKind kind) { kind_ = kind; }
+
   int meshVertexCount() const { return rows_; }
   int cageVertexCount() const { return cols_; }
   bool isSparse() const { return sparse_; }
@@ -115,6 +135,7 @@ class Embedding {
   void makeFloat();
 
   int rows_ = 0, cols_ = 0;
+  EmbeddingKind kind_ = EmbeddingKind::MeanValue;
   bool sparse_ = false;
   bool hasDouble_ = false;
   DenseD denseD_;
@@ -123,6 +144,14 @@ class Embedding {
   SparseF sparseF_;
   BindStats stats_;
 };
+
+// Fills e's statistics that W alone determines, for binds that do not measure while binding:
+// nonZeros, the weight range and negative count, max |Σ_j W_ij − 1| and the linear error
+// max_i |Σ_j W_ij c_j − x_i| / (diagonal of the controls' box), also as unprunedLinearError.
+// points: the bound points (#rows); controls: the controls' rest positions (#columns).
+// Throws std::runtime_error on a non-finite weight (a bind that failed silently).
+void measureWeights(Embedding& e, const std::vector<Eigen::Vector3d>& points,
+                    const std::vector<Eigen::Vector3d>& controls);
 
 // The checksum a weight file ends with, over all bytes before it (tools and tests that build
 // or re-seal files; the fuzz target re-seals its inputs to reach the checks behind it).
@@ -134,6 +163,16 @@ std::array<std::uint64_t, 2> bindCacheKey(const std::vector<Eigen::Vector3d>& po
                                           const mesh::TriangleMesh& cage,
                                           const BindOptions& options);
 std::string bindCachePath(const std::string& cacheDir, const std::array<std::uint64_t, 2>& key);
+
+// The bind cache's two halves, for every kind of bind: the weights stored at path when the file
+// is intact and its key, kind and size match (else nothing, with a warning through
+// options.warning when a file was there but unusable), and the store (atomic; a failure is only
+// a warning).
+std::optional<Embedding> loadCachedBind(const std::string& path,
+                                        const std::array<std::uint64_t, 2>& key, EmbeddingKind kind,
+                                        int rows, int cols, const BindOptions& options);
+void saveCachedBind(const Embedding& e, const std::string& path,
+                    const std::array<std::uint64_t, 2>& key, const BindOptions& options);
 
 // Validates the cage (throws mesh::SurfaceError), then computes mean value coordinates of every
 // point. With options.cacheDir set, reuses a cached bind with the same key, else binds and writes

@@ -425,6 +425,7 @@ Embedding bindHarmonic(const std::vector<Vec3>& points, const mesh::TriangleMesh
   }
 
   Embedding e = Embedding::fromDense(std::move(W), options.keepDoublePrecision);
+  e.setKind(EmbeddingKind::Harmonic);
   rep.totalSeconds = since(t0);
   BindStats& st = e.stats();
   st.seconds = rep.totalSeconds;

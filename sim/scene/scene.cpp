@@ -228,6 +228,50 @@ constexpr ParamRange kCageVertices{4, 100000};
 constexpr ParamRange kCageTightness{0.0, 1.0};
 // Interior lattice spacing, metres (interiorLattice bounds the count).
 constexpr ParamRange kInteriorSpacing{0.0, limits::coordinateLimit};
+// Harmonic grid cells along the cage's longest side; RBF shape (sim/cage/rbf.h).
+constexpr ParamRange kHarmonicResolution{4, 256};
+constexpr ParamRange kRbfShape{0.0, 10.0};
+
+// "embedding": a method name, or {"method": name, options}. FFD lattices need lattice bodies,
+// which scenes do not have.
+cage::EmbeddingMethod parseEmbedding(Fields& f) {
+  cage::EmbeddingMethod m;
+  const json& raw = f.raw("embedding");
+  std::string name;
+  std::optional<Fields> options;
+  if (raw.is_string()) {
+    name = raw.get<std::string>();
+  } else if (raw.is_object()) {
+    options.emplace(raw, f.where("embedding"), f.file());
+    name = options->text("method", nullptr);
+  } else {
+    f.fail("embedding", "must be a method name or an object with \"method\"");
+  }
+  const std::string field = options ? "embedding.method" : "embedding";
+  if (!cage::parseEmbeddingKind(name, &m.kind))
+    f.fail(field, "must be mvc, harmonic or rbf, got '" + name + "'");
+  if (m.kind == cage::EmbeddingKind::FfdBernstein || m.kind == cage::EmbeddingKind::FfdBSpline)
+    f.fail(field, "'" + name +
+                      "' needs a lattice, and scene bodies are cages: use mvc, "
+                      "harmonic or rbf");
+  if (options) {
+    if (m.kind == cage::EmbeddingKind::Harmonic)
+      m.harmonic.resolution =
+          options->integer("resolution", m.harmonic.resolution, kHarmonicResolution);
+    if (m.kind == cage::EmbeddingKind::Rbf)
+      m.rbf.shape = options->number("shape", m.rbf.shape, kRbfShape);
+    options->rejectUnknown();
+  }
+  return m;
+}
+
+// The method and its options as text (part of the key that shares render-mesh binds).
+std::string embeddingText(const cage::EmbeddingMethod& m) {
+  std::string t = cage::embeddingKindName(m.kind);
+  if (m.kind == cage::EmbeddingKind::Harmonic) t += " " + std::to_string(m.harmonic.resolution);
+  if (m.kind == cage::EmbeddingKind::Rbf) t += " " + formatNumber(m.rbf.shape);
+  return t;
+}
 
 mesh::TriangleMesh readMeshField(Fields& f, const std::string& field, const std::string& path,
                                  const std::string& baseDir) {
@@ -306,6 +350,11 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMe
     if (!(sb.interiorSpacing > 0.0)) in.fail("spacing", "is required and must be positive");
     in.rejectUnknown();
   }
+  if (f.has("embedding")) {
+    sb.embedding = parseEmbedding(f);
+    if (renderPath.empty())
+      f.fail("embedding", "needs a render mesh to embed (renderMesh, or an automatic cage's mesh)");
+  }
   if (f.has("pinned")) {
     const json& p = f.raw("pinned");
     if (!p.is_array()) f.fail("pinned", "must be an array of particle indices");
@@ -322,8 +371,9 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMe
 
   // Particles: the vertices of the mesh file or of the automatic cage, scaled, rotated and placed.
   mesh::TriangleMesh mesh, detail;
+  // The method is part of the key: the same pair bound two ways is two embeddings.
   std::array<std::string, 3> renderKey{resolve(baseDir, sb.meshPath), resolve(baseDir, renderPath),
-                                       renderPath};
+                                       renderPath + "\n" + embeddingText(sb.embedding)};
   if (sb.autoCage) {
     detail = readMeshField(f, renderField, renderPath, baseDir);
     cage::CageOptions options;
@@ -369,10 +419,11 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMe
     render->path = renderPath;
     render->triangles = detail.triangles;
     try {
-      // Mean value coordinates are invariant under similarity transforms: bind in file
-      // coordinates so the cache is shared by every placement of the same mesh.
-      render->embedding =
-          std::make_shared<cage::Embedding>(cage::bindMeanValue(detail.vertices, mesh, options));
+      // Mean value, harmonic (a grid on the cage's box) and RBF (shape relative to the handle
+      // spacing) coordinates are invariant under the placement's similarity transform: bind in
+      // file coordinates so the cache is shared by every placement of the same mesh.
+      render->embedding = std::make_shared<cage::Embedding>(
+          cage::bindToCage(detail.vertices, mesh, sb.embedding, options));
     } catch (const std::exception& e) {
       f.fail("mesh", std::string("cannot bind the render mesh to this cage: ") + e.what());
     }
@@ -717,6 +768,14 @@ ordered_json bodyJson(const World& w, const SceneBody& b, const std::string& fro
     j["mesh"] = rebase(b.meshPath, fromDir, toDir);
   }
   if (b.render) j["renderMesh"] = rebase(b.render->path, fromDir, toDir);
+  if (b.render && b.embedding.kind != cage::EmbeddingKind::MeanValue) {
+    ordered_json e;
+    e["method"] = cage::embeddingKindName(b.embedding.kind);
+    if (b.embedding.kind == cage::EmbeddingKind::Harmonic)
+      e["resolution"] = b.embedding.harmonic.resolution;
+    if (b.embedding.kind == cage::EmbeddingKind::Rbf) e["shape"] = b.embedding.rbf.shape;
+    j["embedding"] = e;
+  }
   if (b.interiorSpacing > 0.0) j["interior"] = {{"spacing", b.interiorSpacing}};
   j["translation"] = vec(b.translation);
   j["rotationDegrees"] = vec(b.rotationDegrees);

@@ -2,8 +2,8 @@
 //
 // A scene file names world settings, static colliders and bodies. Each body's particles are
 // the vertices of a mesh file (normally a coarse closed cage); optionally a detailed render
-// mesh is bound to that cage with mean value coordinates and follows the particles. The format
-// is documented in assets/scenes/README.md.
+// mesh is bound to that cage (mean value, harmonic or RBF coordinates) and follows the particles.
+// The format is documented in assets/scenes/README.md.
 #pragma once
 
 #include <array>
@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "sim/cage/auto_cage.h"
+#include "sim/cage/bind.h"
 #include "sim/world/world.h"
 
 namespace sb {
@@ -56,6 +57,9 @@ struct SceneBody {
   int cageVertexCount = 0;
   std::vector<std::array<int, 3>> cageTriangles;  // the particle mesh's faces (may be empty)
   std::shared_ptr<RenderMesh> render;             // null when the body has no render mesh
+  // "embedding": how the render mesh follows the cage: "mvc" (the default), "harmonic" or "rbf",
+  // or an object {"method": …, "resolution": n (harmonic), "shape": s (rbf)} (sim/cage/bind.h).
+  cage::EmbeddingMethod embedding;
   // The transform and scale applied to the file's vertices, kept so the scene can be saved.
   Vec3 translation = Vec3::Zero();
   Vec3 rotationDegrees = Vec3::Zero();  // XYZ Euler angles, degrees

@@ -43,9 +43,9 @@ class BindChecks : public sb::test_support::TempDirTest {
     bytes.append(reinterpret_cast<const char*>(&sum), 8);
     std::ofstream(p, std::ios::binary | std::ios::trunc) << bytes;
   }
-  // Layout of a dense file: magic, version, key[2], rows, cols, sparse, stat count, 15 stats,
+  // Layout of a dense file: magic, version, key[2], rows, cols, sparse, kind, stat count, 15 stats,
   // rows × cols weights, checksum (all 8-byte fields).
-  static constexpr size_t kStats = 8 * 8, kWeights = kStats + 15 * 8;
+  static constexpr size_t kStats = 9 * 8, kWeights = kStats + 15 * 8;
 
   mesh::TriangleMesh cage_;
   std::vector<Vec3> points_;
@@ -95,8 +95,8 @@ TEST_F(BindChecks, ImplausibleStatisticsAreRefused) {
   }
 }
 
-// A sparse file: magic, version, key[2], rows, cols, sparse, stat count, 15 stats, nonzero count,
-// rows + 1 row offsets (8 bytes), column indices (4 bytes), weights (8 bytes), checksum.
+// A sparse file: magic, version, key[2], rows, cols, sparse, kind, stat count, 15 stats, nonzero
+// count, rows + 1 row offsets (8 bytes), column indices (4 bytes), weights (8 bytes), checksum.
 TEST_F(BindChecks, SparseColumnsMustAscendAndTheColumnCountCostsNothing) {
   options_.storage = WeightStorage::Sparse;
   const Embedding first = bindMeanValue(points_, cage_, options_);

@@ -100,6 +100,62 @@ TEST_F(Cli, DeformAppliesTheCageMotion) {
   }
 }
 
+// --method: each method binds and deforms through the same commands; the weight file keeps
+// the method; a bad method or option is refused with the allowed values.
+TEST_F(Cli, MethodsBindAndDeform) {
+  const TriangleMesh mesh = readMesh(kMeshDir + "/suzanne.obj");
+  const TriangleMesh cage = readMesh(kMeshDir + "/suzanne_cage.obj");
+  TriangleMesh moved = cage;
+  for (auto& v : moved.vertices) v = 1.5 * v + Vec3(0, 1, 0);
+  writeObj(path("moved.obj"), moved);
+  const std::string pair =
+      " --mesh " + kMeshDir + "/suzanne.obj --cage " + kMeshDir + "/suzanne_cage.obj";
+  for (const std::string method : {"harmonic", "rbf"}) {
+    const ProcessResult b = run("bind" + pair + " --method " + method + " --resolution 16 --out " +
+                                path(method + ".sbw"));
+    ASSERT_EQ(b.code, 0) << b.err;
+    EXPECT_NE(b.out.find("method:             " + method), std::string::npos) << b.out;
+    const Embedding e = Embedding::load(path(method + ".sbw"));
+    EXPECT_EQ(std::string(embeddingKindName(e.kind())), method);
+    const ProcessResult d =
+        run("deform" + pair + " --method " + method + " --resolution 16 --deformed-cage " +
+            path("moved.obj") + " --out " + path("out.obj"));
+    ASSERT_EQ(d.code, 0) << d.err;
+    const TriangleMesh out = readMesh(path("out.obj"));
+    ASSERT_EQ(out.vertices.size(), mesh.vertices.size());
+    // A similarity of the cage moves the mesh by it: exactly for rbf, to the grid's precision
+    // (the weights' own linear error, scaled by 1.5) for harmonic.
+    const double allowed =
+        method == "rbf" ? 1e-9 : 1.5 * e.stats().maxLinearError * testing::diagonal(cage) + 1e-9;
+    double err = 0.0;
+    for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
+      err = std::max(err, (out.vertices[i] - (1.5 * mesh.vertices[i] + Vec3(0, 1, 0))).norm());
+    EXPECT_LT(err, allowed) << method;
+  }
+  const ProcessResult bad = run("bind" + pair + " --method ffd");
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("--method"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("harmonic"), std::string::npos) << bad.err;
+  const ProcessResult shape = run("bind" + pair + " --method rbf --shape 20");
+  EXPECT_EQ(shape.code, 2);
+  EXPECT_NE(shape.err.find("--shape"), std::string::npos) << shape.err;
+}
+
+// softbody run --fold-check: a body resting on the floor never folds, and the run says how
+// many steps it checked; a scene without render meshes is refused.
+TEST_F(Cli, RunChecksForFolds) {
+  const std::string scene = std::string(SOFTBODY_TEST_MESH_DIR) + "/../scenes/default.json";
+  const ProcessResult r = run("run " + scene + " --steps 40 --every 10 --fold-check --threads 1");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("fold check: 0 of 4 checked steps had a fold"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("fold: step"), std::string::npos) << r.out;
+  std::ofstream(path("bare.json"))
+      << R"({"bodies": [{"mesh": ")" << kMeshDir << R"(/suzanne_cage.obj"}]})";
+  const ProcessResult bare = run("run " + path("bare.json") + " --steps 1 --fold-check");
+  EXPECT_EQ(bare.code, 1);
+  EXPECT_NE(bare.err.find("no render meshes to check"), std::string::npos) << bare.err;
+}
+
 TEST_F(Cli, ErrorsAreClearAndNonZero) {
   const std::string mesh = kMeshDir + "/bunny.obj", cage = kMeshDir + "/bunny_cage.obj";
   // Missing file.

@@ -268,6 +268,26 @@ def test_bind_and_deform_reproduce_an_affine_map():
         sb.bind(points, cage_v, cage_f[:, ::-1])  # inside out
 
 
+def test_bind_methods():
+    cage_v, cage_f = cube(size=2.0, centre=(0.0, 0.0, 0.0))
+    rng = np.random.default_rng(8)
+    points = rng.uniform(-0.8, 0.8, (100, 3))
+    a = np.array([[1.1, 0.2, 0.0], [0.0, 0.9, 0.1], [0.1, 0.0, 1.2]])
+    # harmonic: its grid of 16 cells along 2 m is accurate to about a cell (0.125 m).
+    for method, tol in (("mvc", 1e-5), ("rbf", 1e-5), ("harmonic", 0.25)):
+        e = sb.bind(points, cage_v, cage_f, method=method, resolution=16)
+        assert e.method == method
+        moved = e.deform(cage_v @ a.T + [1.0, 2.0, 3.0])
+        # mvc and rbf reproduce affine maps exactly; harmonic to its grid's precision.
+        assert np.abs(moved - (points @ a.T + [1.0, 2.0, 3.0])).max() < tol, method
+    with pytest.raises(ValueError, match="method must be"):
+        sb.bind(points, cage_v, cage_f, method="ffd-bspline")
+    with pytest.raises(ValueError, match=r"resolution must be in \[4, 256\]"):
+        sb.bind(points, cage_v, cage_f, method="harmonic", resolution=2)
+    with pytest.raises(ValueError, match=r"shape must be in \[0, 10\]"):
+        sb.bind(points, cage_v, cage_f, method="rbf", shape=-1.0)
+
+
 def test_help_documents_units_and_shapes():
     assert "float32 (P, 3)" in sb.World.positions.__doc__
     assert "GIL" in sb.World.step.__doc__

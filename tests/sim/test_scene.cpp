@@ -6,6 +6,7 @@
 #include <fstream>
 
 #include "sim/mesh/mesh_io.h"
+#include "sim/scene/fold_watch.h"
 #include "sim/scene/frame_export.h"
 #include "sim/scene/scene.h"
 #include "sim/scene/scene_runner.h"
@@ -306,6 +307,128 @@ TEST(Scene, AutomaticCageErrorsNameTheField) {
   // Millions of lattice points in the bunny cage's box (~10 m in file units).
   expectSceneError(withCage(cage + R"("interior": {"spacing": 0.001})"),
                    "bodies[0].interior: spacing: 0.001");
+}
+
+// "embedding" per body: the method binds the render mesh (its kind is kept), bodies share a
+// bind only when the method and its options match, the rest pose reproduces the placed mesh to
+// each method's linear precision, and saving writes the method back (nothing for mvc).
+TEST(Scene, EmbeddingMethodPerBody) {
+  const fs::path dir = fs::temp_directory_path() / "softbody_embedding_scene";
+  fs::remove_all(dir);
+  ::setenv("SOFTBODY_CACHE_DIR", (dir / "cache").c_str(), 1);
+  const std::string pair = R"("mesh": ")" + kAssets +
+                           R"(/meshes/suzanne_cage.obj", "renderMesh": ")" + kAssets +
+                           R"(/meshes/suzanne.obj", "translation": [0, 1, 0])";
+  const std::string text = R"({"bodies": [
+      {"name": "m", )" + pair +
+                           R"(},
+      {"name": "h", )" + pair +
+                           R"(, "embedding": {"method": "harmonic", "resolution": 16}},
+      {"name": "r", )" + pair +
+                           R"(, "embedding": "rbf"},
+      {"name": "r2", )" + pair +
+                           R"(, "embedding": {"method": "rbf", "shape": 1}},
+      {"name": "r3", )" + pair +
+                           R"(, "embedding": {"method": "rbf", "shape": 0.5}}]})";
+  const Scene scene = parseScene(text, "embedding.json", "");
+  ASSERT_EQ(scene.bodies.size(), 5u);
+  const cage::EmbeddingKind kinds[] = {cage::EmbeddingKind::MeanValue,
+                                       cage::EmbeddingKind::Harmonic, cage::EmbeddingKind::Rbf,
+                                       cage::EmbeddingKind::Rbf, cage::EmbeddingKind::Rbf};
+  for (size_t i = 0; i < 5; ++i) {
+    ASSERT_TRUE(scene.bodies[i].render);
+    EXPECT_EQ(scene.bodies[i].render->embedding->kind(), kinds[i]) << i;
+    EXPECT_EQ(scene.bodies[i].embedding.kind, kinds[i]) << i;
+  }
+  EXPECT_EQ(scene.bodies[2].render, scene.bodies[3].render);  // "rbf" is shape 1
+  EXPECT_NE(scene.bodies[3].render, scene.bodies[4].render);
+  EXPECT_NE(scene.bodies[0].render, scene.bodies[1].render);
+  const mesh::TriangleMesh detail = mesh::readMesh(kAssets + "/meshes/suzanne.obj");
+  const mesh::TriangleMesh cageMesh = mesh::readMesh(kAssets + "/meshes/suzanne_cage.obj");
+  Eigen::AlignedBox3d box;
+  for (const Vec3& v : cageMesh.vertices) box.extend(v);
+  for (size_t i = 0; i < 5; ++i) {
+    PointsRowMajor rendered;
+    scene.renderVertices(int(i), rendered);
+    ASSERT_EQ(size_t(rendered.rows()), detail.vertices.size());
+    double worst = 0.0;
+    for (size_t v = 0; v < detail.vertices.size(); ++v)
+      worst = std::max(worst, (rendered.row(Eigen::Index(v)).cast<double>().transpose() -
+                               (detail.vertices[v] + Vec3(0, 1, 0)))
+                                  .norm());
+    // Float particles; the harmonic grid's own error is its linear precision (about a cell).
+    const double allowed =
+        1e-5 + scene.bodies[i].render->embedding->stats().maxLinearError * box.diagonal().norm();
+    EXPECT_LT(worst, allowed) << i;
+  }
+  const std::string path = (dir / "saved.json").string();
+  saveScene(scene, path);
+  const std::string saved = [&] {
+    std::ifstream in(path);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  }();
+  EXPECT_EQ(saved.find("\"mvc\""), std::string::npos) << saved;
+  const Scene back = loadScene(path);
+  ASSERT_EQ(back.bodies.size(), 5u);
+  for (size_t i = 0; i < 5; ++i) EXPECT_EQ(back.bodies[i].render->embedding->kind(), kinds[i]);
+  EXPECT_EQ(back.bodies[1].embedding.harmonic.resolution, 16);
+  EXPECT_EQ(back.bodies[4].embedding.rbf.shape, 0.5);
+  ::unsetenv("SOFTBODY_CACHE_DIR");
+  fs::remove_all(dir);
+}
+
+// The fold watch checks each body with a render mesh with its own method: moved as a whole it
+// reports nothing; turned inside out (mirrored) every sample of that body folds, and only its.
+TEST(FoldWatch, FindsTheBodyTurnedInsideOut) {
+  const std::string pair = R"("mesh": ")" + kAssets +
+                           R"(/meshes/suzanne_cage.obj", "renderMesh": ")" + kAssets +
+                           R"(/meshes/suzanne.obj")";
+  Scene scene = parseScene(R"({"bodies": [{"name": "a", )" + pair +
+                               R"(, "translation": [0, 1, 0]}, {"name": "b", )" + pair +
+                               R"(, "translation": [3, 1, 0], "embedding": "rbf"},
+                                  {"name": "no render", "mesh": ")" +
+                               kAssets + R"(/meshes/suzanne_cage.obj"}]})",
+                           "folds.json", "");
+  const FoldWatch watch(scene, 200);
+  EXPECT_EQ(watch.watchedBodies(), 2);
+  EXPECT_TRUE(watch.folded(scene).empty());
+  auto transform = [&](int body, const Mat3& M) {
+    const BodyHandle h = scene.bodies[size_t(body)].handle;
+    const Eigen::MatrixX3d x = scene.world.positions(h).cast<double>();
+    const Vec3 c = x.colwise().mean().transpose();
+    Eigen::MatrixX3d y = x;
+    for (Eigen::Index i = 0; i < x.rows(); ++i)
+      y.row(i) = (M * (x.row(i).transpose() - c) + c + Vec3(0.2, 0.5, -0.1)).transpose();
+    scene.world.setState(h, y, Eigen::MatrixX3d::Zero(x.rows(), 3));
+  };
+  transform(0, Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()).toRotationMatrix());
+  EXPECT_TRUE(watch.folded(scene).empty());
+  transform(1, Mat3(Vec3(-1, 1, 1).asDiagonal()));
+  const std::vector<FoldWatch::BodyFolds> folds = watch.folded(scene);
+  ASSERT_EQ(folds.size(), 1u);
+  EXPECT_EQ(folds[0].body, 1);
+  EXPECT_EQ(folds[0].report.folded, folds[0].report.samples);
+  EXPECT_NEAR(folds[0].report.minDeterminant, -1.0, 1e-3);
+}
+
+TEST(Scene, EmbeddingErrorsNameTheField) {
+  const std::string render = R"(, "renderMesh": ")" + kAssets + R"(/meshes/suzanne.obj")";
+  expectSceneError(body(render + R"(, "embedding": "nope")"),
+                   "bodies[0].embedding: must be mvc, harmonic or rbf, got 'nope'");
+  expectSceneError(body(render + R"(, "embedding": "ffd-bspline")"),
+                   "bodies[0].embedding: 'ffd-bspline' needs a lattice");
+  expectSceneError(body(render + R"(, "embedding": 3)"),
+                   "bodies[0].embedding: must be a method name or an object");
+  expectSceneError(body(render + R"(, "embedding": {"shape": 1})"),
+                   "bodies[0].embedding.method: is required");
+  expectSceneError(body(render + R"(, "embedding": {"method": "rbf", "shape": 11})"),
+                   "bodies[0].embedding.shape: must be in [0, 10], got 11");
+  expectSceneError(body(render + R"(, "embedding": {"method": "harmonic", "resolution": 3})"),
+                   "bodies[0].embedding.resolution: must be in [4, 256], got 3");
+  expectSceneError(body(render + R"(, "embedding": {"method": "harmonic", "resolutoin": 8})"),
+                   "bodies[0].embedding.resolutoin: unknown field");
+  expectSceneError(body(R"(, "embedding": "rbf")"),
+                   "bodies[0].embedding: needs a render mesh to embed");
 }
 
 TEST(Scene, RestitutionAndSleepAreReadFromTheFile) {
