@@ -324,9 +324,20 @@ Embedding bindFfd(const std::vector<Vec3>& points, const FfdLattice& lattice,
   const auto t0 = std::chrono::steady_clock::now();
   lattice.validate();
   const int rows = static_cast<int>(points.size());
-  if (points.size() > static_cast<std::size_t>(std::numeric_limits<int>::max()))
-    throw std::invalid_argument("points: too many for an Embedding");
   const int cols = lattice.nodeCount();
+  // Storage estimate before anything is allocated (sparse: a 4-byte index and 8 + 4 bytes of
+  // double and float weight per slot; dense: 8 + 4 bytes per entry). The sparse index is an int.
+  const bool sparse = lattice.basis == FfdBasis::BSpline;
+  const double perRow = sparse ? 64.0 * 16.0 : cols * 12.0;
+  if (double(points.size()) * (sparse ? 64.0 : double(cols)) >
+          double(std::numeric_limits<int>::max()) ||
+      double(points.size()) * perRow > double(options.maxWeightBytes)) {
+    throw std::invalid_argument(
+        "points: " + std::to_string(points.size()) + " points × " +
+        (sparse ? std::string("64") : std::to_string(cols)) + " weights need about " +
+        str(double(points.size()) * perRow / 1e9) +
+        " GB, more than maxWeightBytes or the 2^31 entries of an Embedding");
+  }
   const FfdNodes rest = lattice.restNodes();
   const double diagonal = lattice.size.norm();
 
@@ -345,13 +356,16 @@ Embedding bindFfd(const std::vector<Vec3>& points, const FfdLattice& lattice,
   };
 
   Embedding e;
-  if (lattice.basis == FfdBasis::BSpline) {
+  if (sparse) {
+    // Written straight into W's compressed arrays (64 slots per row, the exact zeros of span
+    // borders skipped, the tail cut at the end): no triplets, no second copy.
     Embedding::SparseD W(rows, cols);
-    std::vector<int> start(rows + 1, 0);
-    std::vector<int> col;
-    std::vector<double> val;
-    col.reserve(std::size_t(rows) * 64);
-    val.reserve(std::size_t(rows) * 64);
+    W.resizeNonZeros(static_cast<Eigen::Index>(rows) * 64);
+    int* start = W.outerIndexPtr();
+    int* col = W.innerIndexPtr();
+    double* val = W.valuePtr();
+    int nnz = 0;
+    start[0] = 0;
     for (int r = 0; r < rows; ++r) {
       axisParameters(lattice, points[r], r, ax);
       evaluateAxes(lattice, ax, false);
@@ -359,19 +373,17 @@ Embedding bindFfd(const std::vector<Vec3>& points, const FfdLattice& lattice,
       Vec3 image = Vec3::Zero();
       forEachWeight(lattice, ax, [&](int n, double w) {
         if (w == 0.0) return;  // a span border: the node does not act on this point
-        col.push_back(n);
-        val.push_back(w);
+        col[nnz] = n;
+        val[nnz] = w;
+        ++nnz;
         sum += w;
         image += w * rest.row(n).transpose();
         accountWeight(w);
       });
-      start[r + 1] = static_cast<int>(col.size());
+      start[r + 1] = nnz;
       account(points[r], sum, image);
     }
-    W.resizeNonZeros(static_cast<Eigen::Index>(col.size()));
-    std::copy(start.begin(), start.end(), W.outerIndexPtr());
-    std::copy(col.begin(), col.end(), W.innerIndexPtr());
-    std::copy(val.begin(), val.end(), W.valuePtr());
+    W.data().resize(nnz);
     e = Embedding::fromSparse(std::move(W), options.keepDoublePrecision);
   } else {
     Embedding::DenseD W(rows, cols);

@@ -85,6 +85,10 @@ void ffdWeights(const FfdLattice& lattice, const Eigen::Vector3d& point,
 struct FfdBindOptions {
   // Keep the double weights in the Embedding (rowWeights, deformDouble); float always.
   bool keepDoublePrecision = true;
+  // Memory the weights may take at most (bytes, estimated before binding: 12 bytes per point ×
+  // node for Bernstein, 16 bytes per point × 64 for BSpline); a larger bind is refused
+  // (std::invalid_argument with the figure) instead of exhausting memory.
+  std::uint64_t maxWeightBytes = std::uint64_t(4) << 30;
 };
 
 // The weights of every point as an Embedding (#points × #nodes): sparse for BSpline (≤ 64

@@ -535,6 +535,17 @@ TEST(FfdErrors, BadLatticesAreRefusedWithTheReason) {
   EXPECT_NE(thrownMessage([&] { bindFfd(pts, L); }).find("at most 32"), std::string::npos);
 }
 
+TEST(FfdErrors, BindsTooLargeForTheMemoryLimitAreRefused) {
+  const FfdLattice L = makeLattice(FfdBasis::Bernstein, {10, 10, 10}, Vec3::Zero(), Vec3::Ones());
+  const std::vector<Vec3> pts(1000, Vec3(0.5, 0.5, 0.5));
+  FfdBindOptions o;
+  o.maxWeightBytes = 1000 * 1000 * 12 - 1;  // one byte short of the dense weights
+  EXPECT_NE(thrownMessage([&] { bindFfd(pts, L, o); }).find("1000 points × 1000 weights"),
+            std::string::npos);
+  o.maxWeightBytes = 1000 * 1000 * 12;
+  EXPECT_NO_THROW(bindFfd(pts, L, o));
+}
+
 TEST(FfdErrors, PointsOutsideTheBoxAreNamed) {
   const FfdLattice L = makeLattice(FfdBasis::BSpline, {5, 5, 5}, Vec3::Zero(), Vec3::Ones());
   const std::vector<Vec3> pts = {Vec3(0.5, 0.5, 0.5), Vec3(0.2, 1.5, 0.3)};
