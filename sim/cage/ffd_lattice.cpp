@@ -355,8 +355,9 @@ Embedding bindFfd(const std::vector<Vec3>& points, const FfdLattice& lattice,
     if (w < 0.0) ++st.negativeCount;
   };
 
-  Embedding e;
-  if (sparse) {
+  // Eigen 3.4's SparseMatrix has no move constructor or assignment (a "move" copies), so the
+  // Embedding is made in place (prvalues, guaranteed elision) rather than assigned.
+  auto makeSparse = [&] {
     // Written straight into W's compressed arrays (64 slots per row, the exact zeros of span
     // borders skipped, the tail cut at the end): no triplets, no second copy.
     Embedding::SparseD W(rows, cols);
@@ -384,8 +385,9 @@ Embedding bindFfd(const std::vector<Vec3>& points, const FfdLattice& lattice,
       account(points[r], sum, image);
     }
     W.data().resize(nnz);
-    e = Embedding::fromSparse(std::move(W), options.keepDoublePrecision);
-  } else {
+    return Embedding::fromSparse(std::move(W), options.keepDoublePrecision);
+  };
+  auto makeDense = [&] {
     Embedding::DenseD W(rows, cols);
     for (int r = 0; r < rows; ++r) {
       axisParameters(lattice, points[r], r, ax);
@@ -400,8 +402,9 @@ Embedding bindFfd(const std::vector<Vec3>& points, const FfdLattice& lattice,
       });
       account(points[r], sum, image);
     }
-    e = Embedding::fromDense(std::move(W), options.keepDoublePrecision);
-  }
+    return Embedding::fromDense(std::move(W), options.keepDoublePrecision);
+  };
+  Embedding e = sparse ? makeSparse() : makeDense();
   if (rows == 0) st.minWeight = st.maxWeight = 0.0;
   st.nonZeros = e.nonZeros();
   st.threads = 1;

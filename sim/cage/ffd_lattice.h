@@ -138,7 +138,8 @@ FfdDragReport ffdDragPoints(const FfdLattice& lattice, FfdNodes& nodes,
 // Sufficient condition for injectivity of a uniform cubic B-spline map (Choi & Lee 2000, after
 // Goodman & Unsworth): with each axis scaled to unit spacing, every control-point displacement
 // component below 1/K: K₂ ≈ 2.046 (0.48) for a 2D map, K₃ ≈ 2.48 (0.40) for a 3D one. The
-// thesis quotes the 2D figure, 0.48; the lattice here is 3D, so the default is 0.40.
+// thesis quotes the 2D figure, 0.48; the lattice here is 3D, so the default is 0.40 (and 0.48
+// is not enough in 3D: test_ffd builds a lattice displaced by 0.47 spacings with det J < 0).
 inline constexpr double kFfdInjectivityBound2D = 0.48;
 inline constexpr double kFfdInjectivityBound3D = 0.40;
 

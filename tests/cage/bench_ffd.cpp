@@ -5,7 +5,9 @@
 //   BM_FfdDeBoor           ffdDeformDeBoor: recursive evaluation of every point, every frame
 //   BM_FfdPrecomputed      Embedding::deform (float) with the bindFfd weights: W · nodes
 //   BM_FfdPrecomputedDouble Embedding::deformDouble (Eigen product, double)
-//   BM_FfdBind             bindFfd: the per-point basis products (the precomputation)
+//   BM_FfdBind             bindFfd: the per-point basis products (the precomputation) and the
+//                          Embedding built from them
+//   BM_FfdWeights          the per-point products alone (ffdWeights, reused buffer)
 // Counter per_vertex = time per frame / 100k (seconds, SI prefix).
 #include <benchmark/benchmark.h>
 
@@ -135,11 +137,29 @@ void BM_FfdBind(benchmark::State& state) {
   perVertex(state, c);
 }
 
+// The per-point work of the bind alone (ffdWeights into a reused vector: validation, per-axis
+// bases, 64 or #nodes products), without building the Embedding.
+void BM_FfdWeights(benchmark::State& state) {
+  const int c = static_cast<int>(state.range(0));
+  Setup& s = setup(c);
+  std::vector<std::pair<int, double>> w;
+  double sink = 0.0;
+  for (auto _ : state) {
+    for (const Vec3& x : s.points) {
+      ffdWeights(s.lattice, x, w);
+      sink += w[w.size() / 2].second;
+    }
+    benchmark::DoNotOptimize(sink);
+  }
+  perVertex(state, c);
+}
+
 #define FFD_CONFIGS DenseRange(0, static_cast<int>(std::size(kConfigs)) - 1)->ArgName("lattice")
 BENCHMARK(BM_FfdDeBoor)->FFD_CONFIGS->UseRealTime()->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FfdPrecomputed)->FFD_CONFIGS->UseRealTime()->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FfdPrecomputedDouble)->FFD_CONFIGS->UseRealTime()->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FfdBind)->FFD_CONFIGS->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_FfdWeights)->FFD_CONFIGS->UseRealTime()->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

@@ -501,6 +501,71 @@ TEST(FfdFold, DisplacementsBelowTheBoundNeverFold) {
   }
 }
 
+// An adversary for the displacement bound: on one span of a unit-spacing lattice, det J is
+// linear in each row of J and each row is linear in one component of the node displacements,
+// so for a fixed point the worst displacements with |ΔP| ≤ delta lie at ±delta; alternating
+// minimisation over the rows finds bad sign patterns. Uses only the 1D basis; det J of the
+// result is then evaluated by the code under test. Returns the worst det found.
+struct Adversary {
+  double det = 1.0;
+  Vec3 point = Vec3::Zero();
+  PointsD displacement;  // 64 × 3, node order of a 4×4×4 lattice
+};
+Adversary searchFold(double delta) {
+  std::mt19937 rng(12);
+  Adversary worst;
+  for (int g = 0; g < 7 * 7 * 7; ++g) {
+    const double t[3] = {(g % 7) / 6.0, (g / 7 % 7) / 6.0, (g / 49) / 6.0};
+    double v[3][4], d[3][4];
+    for (int a = 0; a < 3; ++a) ffdCubicBSplineBasis(t[a], v[a], d[a]);
+    std::vector<Vec3> grad(64);
+    for (int n = 0; n < 64; ++n) {
+      const int i = n % 4, j = n / 4 % 4, k = n / 16;
+      grad[n] = Vec3(d[0][i] * v[1][j] * v[2][k], v[0][i] * d[1][j] * v[2][k],
+                     v[0][i] * v[1][j] * d[2][k]);
+    }
+    for (int restart = 0; restart < 4; ++restart) {
+      PointsD s(64, 3);
+      for (int n = 0; n < 64; ++n)
+        for (int a = 0; a < 3; ++a) s(n, a) = (rng() & 1) ? delta : -delta;
+      auto jacobian = [&] {
+        Mat3 J = Mat3::Identity();
+        for (int n = 0; n < 64; ++n) J += s.row(n).transpose() * grad[n].transpose();
+        return J;
+      };
+      for (int it = 0; it < 20; ++it) {
+        for (int a = 0; a < 3; ++a) {
+          const Mat3 J = jacobian();
+          const Vec3 c = J.row((a + 1) % 3).transpose().cross(J.row((a + 2) % 3).transpose());
+          for (int n = 0; n < 64; ++n) s(n, a) = grad[n].dot(c) > 0 ? -delta : delta;
+        }
+      }
+      const double det = jacobian().determinant();
+      if (det < worst.det) worst = {det, Vec3(t[0], t[1], t[2]), s};
+    }
+  }
+  return worst;
+}
+
+TEST(FfdFold, ThreeDimensionalLatticesNeedTheSmallerBound) {
+  // The thesis' 0.48 (Goodman–Unsworth, Choi–Lee K₂) is a 2D result: a 3D lattice displaced by
+  // 0.47 spacings folds. Choi–Lee's 3D figure 1/K₃ ≈ 0.40 holds against the same search.
+  const FfdLattice L = makeLattice(FfdBasis::BSpline, {4, 4, 4}, Vec3::Zero(), Vec3::Ones());
+  const Adversary bad = searchFold(0.47);
+  ASSERT_LT(bad.det, -0.05);
+  const PointsD P = L.restNodes() + bad.displacement;
+  EXPECT_NEAR(ffdJacobian(L, P, bad.point).determinant(), bad.det, 1e-12);
+  EXPECT_GT(ffdJacobianCheck(L, P, {bad.point}).nonPositiveCount, 0);
+  EXPECT_TRUE(ffdInjectivityBound(L, P, kFfdInjectivityBound2D).guaranteedInjective);  // wrongly
+  EXPECT_FALSE(ffdInjectivityBound(L, P).guaranteedInjective);
+
+  const Adversary good = searchFold(0.999 * kFfdInjectivityBound3D);
+  EXPECT_GT(good.det, 0.0);
+  const PointsD Q = L.restNodes() + good.displacement;
+  EXPECT_TRUE(ffdInjectivityBound(L, Q).guaranteedInjective);
+  EXPECT_NEAR(ffdJacobian(L, Q, good.point).determinant(), good.det, 1e-12);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Bad input
 
