@@ -159,7 +159,7 @@ struct FfdJacobianReport {
   std::int64_t samples = 0;
 };
 // det J at each rest-space sample point (each in the box). A fold shows as det ≤ 0; det > 0 at
-// the samples proves nothing between them.
+// the samples proves nothing between them. No samples: minDeterminant 0, counts 0.
 FfdJacobianReport ffdJacobianCheck(const FfdLattice& lattice, const FfdNodes& nodes,
                                    const std::vector<Eigen::Vector3d>& samples);
 

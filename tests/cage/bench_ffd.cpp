@@ -3,6 +3,7 @@
 // products), for 100k points in the unit cube and lattices of 4×4×4, 8×8×8 and 6×6×7 nodes
 // (cubic B-spline) and 4×4×4 (Bernstein, degree 3: the thesis' case), one thread:
 //   BM_FfdDeBoor           ffdDeformDeBoor: recursive evaluation of every point, every frame
+//                          (de Boor; de Casteljau, its Bézier case, for Bernstein)
 //   BM_FfdPrecomputed      Embedding::deform (float) with the bindFfd weights: W · nodes
 //   BM_FfdPrecomputedDouble Embedding::deformDouble (Eigen product, double)
 //   BM_FfdBind             bindFfd: the per-point basis products (the precomputation) and the

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -322,6 +323,28 @@ TEST(FfdBind, EmbeddingDeformEqualsDeBoor) {
     const Eigen::Matrix<float, Eigen::Dynamic, 3> Pf = P.cast<float>();
     e.deform(Pf, out);
     EXPECT_LT((out.cast<double>() - viaDeBoor).cwiseAbs().maxCoeff(), 2e-5);
+  }
+}
+
+TEST(FfdBind, SavesAndLoadsLikeAnyEmbedding) {
+  // The weight file's load checks (rows summing to 1, indices, checksum) accept an FFD bind.
+  std::mt19937 rng(13);
+  for (const FfdLattice& L :
+       {makeLattice(FfdBasis::BSpline, {6, 5, 4}), makeLattice(FfdBasis::Bernstein, {3, 4, 3})}) {
+    const std::vector<Vec3> pts = randomPointsIn(L, 200, rng);
+    const Embedding e = bindFfd(pts, L);
+    const std::string path =
+        ::testing::TempDir() + "/ffd_bind_" + std::to_string(L.nodeCount()) + ".sbw";
+    e.save(path);
+    const Embedding back = Embedding::load(path);
+    std::remove(path.c_str());
+    EXPECT_EQ(back.isSparse(), e.isSparse());
+    EXPECT_EQ(back.nonZeros(), e.nonZeros());
+    const PointsD P = L.restNodes() * 1.5;
+    PointsD a, b;
+    e.deformDouble(P, a);
+    back.deformDouble(P, b);
+    EXPECT_EQ(a, b);
   }
 }
 
