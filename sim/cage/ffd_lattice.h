@@ -10,9 +10,9 @@
 //    i + nodes[0] · (j + nodes[1] · k) (x fastest). Node positions are an FfdNodes array of
 //    #nodes × 3 rows in that order (metres); the Embedding's columns are the same nodes.
 //  * Points are given in the rest (undeformed) space and must lie in the closed lattice box
-//    [origin, origin + size]; a point's weights depend only on its rest position, the deformed
-//    position is Σ_n w_n(x) · nodes_n.
-//  * Bernstein: nodes per axis N ≥ 2, degree N − 1 on that axis, rest node i at
+//    [origin, origin + size] (up to 1e-12 · size of rounding, clamped); a point's weights depend
+//    only on its rest position, the deformed position is Σ_n w_n(x) · nodes_n.
+//  * Bernstein: nodes per axis 2 ≤ N ≤ 32, degree N − 1 on that axis, rest node i at
 //    origin + size · i / (N − 1) (nodes on the box, corners included).
 //  * BSpline: uniform cubic B-spline with an open (unclamped) uniform knot vector; nodes per
 //    axis N ≥ 4 give N − 3 knot spans that cover the box exactly, spacing h = size / (N − 3);
