@@ -405,6 +405,8 @@ Embedding bindFfd(const std::vector<Vec3>& points, const FfdLattice& lattice,
     return Embedding::fromDense(std::move(W), options.keepDoublePrecision);
   };
   Embedding e = sparse ? makeSparse() : makeDense();
+  e.setKind(lattice.basis == FfdBasis::BSpline ? EmbeddingKind::FfdBSpline
+                                               : EmbeddingKind::FfdBernstein);
   if (rows == 0) st.minWeight = st.maxWeight = 0.0;
   st.nonZeros = e.nonZeros();
   st.threads = 1;

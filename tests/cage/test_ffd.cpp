@@ -340,6 +340,8 @@ TEST(FfdBind, SavesAndLoadsLikeAnyEmbedding) {
     std::remove(path.c_str());
     EXPECT_EQ(back.isSparse(), e.isSparse());
     EXPECT_EQ(back.nonZeros(), e.nonZeros());
+    EXPECT_EQ(back.kind(), L.basis == FfdBasis::BSpline ? EmbeddingKind::FfdBSpline
+                                                        : EmbeddingKind::FfdBernstein);
     const PointsD P = L.restNodes() * 1.5;
     PointsD a, b;
     e.deformDouble(P, a);
