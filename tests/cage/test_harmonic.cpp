@@ -252,6 +252,56 @@ TEST(Harmonic, NestedDissectionAndAmdOrderingsGiveTheSameWeights) {
   EXPECT_LT(worst, 1e-12);
 }
 
+// Points on the cage get (to the discretisation error) the hat functions there; points far
+// outside get exactly the hat functions of their closest cage point; the smallest resolution
+// still gives a partition of unity.
+TEST(Harmonic, PointsOnAndOutsideTheCage) {
+  const TriangleMesh cage = tetrahedron();
+  // On the faces: one barycentric coordinate 0.
+  std::vector<Vec3> onFaces;
+  for (int i = 0; i < 40; ++i) {
+    Vec3 p = randomTetPoints(1, 0.0, 100u + unsigned(i))[0];
+    if (i % 4 < 3)
+      p[i % 4] = 0.0;  // on the face x = 0, y = 0 or z = 0
+    else
+      p /= p.sum();  // on the slanted face
+    onFaces.push_back(p);
+  }
+  double previous = std::numeric_limits<double>::infinity();
+  for (int res : {16, 32}) {
+    HarmonicOptions o;
+    o.resolution = res;
+    const double err = tetError(bindHarmonic(onFaces, cage, o), onFaces);
+    EXPECT_LT(err, 2.0 / res) << "resolution " << res;  // about a cell
+    EXPECT_LT(err, 0.7 * previous);
+    previous = err;
+  }
+
+  const std::vector<Vec3> far = {Vec3(2, 2, 2), Vec3(-3, 0.25, 0.25), Vec3(0.5, 0.25, -4)};
+  HarmonicOptions o;
+  o.resolution = 8;
+  HarmonicReport r;
+  const Embedding e = bindHarmonic(far, cage, o, &r);
+  EXPECT_EQ(r.closestPointPoints, 3);
+  // Closest points: (1/3, 1/3, 1/3) on the slanted face, (0, 0.25, 0.25) on x = 0,
+  // (0.5, 0.25, 0) on z = 0; their barycentric coordinates (w0, w1, w2, w3).
+  const double expected[3][4] = {
+      {0, 1.0 / 3, 1.0 / 3, 1.0 / 3}, {0.5, 0, 0.25, 0.25}, {0.25, 0.5, 0.25, 0}};
+  std::vector<std::pair<int, double>> row;
+  for (int i = 0; i < 3; ++i) {
+    e.rowWeights(i, row);
+    double w[4] = {0, 0, 0, 0};
+    for (const auto& [j, v] : row) w[j] = v;
+    for (int j = 0; j < 4; ++j) EXPECT_NEAR(w[j], expected[i][j], 1e-12) << i << " " << j;
+  }
+
+  o.resolution = 4;
+  const auto inside = randomTetPoints(20, 0.0, 9);
+  const Embedding coarse = bindHarmonic(inside, cage, o, &r);
+  EXPECT_LT(r.maxSumError, 1e-12);
+  EXPECT_GE(r.minWeight, 0.0);
+}
+
 std::string messageOf(const std::function<void()>& f) {
   try {
     f();
