@@ -386,7 +386,7 @@ Embedding bindHarmonic(const std::vector<Vec3>& points, const mesh::TriangleMesh
       }
     triplets.emplace_back(r, r, diag);
   }
-  std::sort(rhs.begin(), rhs.end(),
+  std::stable_sort(rhs.begin(), rhs.end(),
             [](const RhsEntry& x, const RhsEntry& y) { return x.column < y.column; });
   Eigen::SparseMatrix<double> A(nI, nI);
   A.setFromTriplets(triplets.begin(), triplets.end());
