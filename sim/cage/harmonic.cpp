@@ -180,7 +180,7 @@ Embedding bindHarmonic(const std::vector<Vec3>& points, const mesh::TriangleMesh
   // bytes); the solutions, right-hand side blocks and factor of the interior nodes (bounded by
   // the node count until they are known); the dense weights (double + float).
   auto refuse = [&](double bytes, const std::string& what) {
-    throw std::runtime_error("bindHarmonic: " + what + " need about " +
+    throw std::runtime_error("bindHarmonic: " + what + " about " +
                              formatBytes(std::uint64_t(bytes)) + ", more than the " +
                              formatBytes(options.maxBytes) + " allowed");
   };
@@ -191,7 +191,7 @@ Embedding bindHarmonic(const std::vector<Vec3>& points, const mesh::TriangleMesh
                                         std::to_string(dims[1]) + "×" + std::to_string(dims[2]) +
                                         " nodes (resolution " + std::to_string(options.resolution) +
                                         ") and " + std::to_string(n) + "×" + std::to_string(m) +
-                                        " dense weights");
+                                        " dense weights need");
   const Vec3 origin = box.center() - 0.5 * h * Vec3(dims[0] - 1, dims[1] - 1, dims[2] - 1);
   const std::int64_t nx = dims[0], ny = dims[1], nz = dims[2];
   const std::int64_t N = nx * ny * nz;
@@ -307,7 +307,7 @@ Embedding bindHarmonic(const std::vector<Vec3>& points, const mesh::TriangleMesh
   if (gridBytes + weightBytes + solveBytes > double(options.maxBytes))
     refuse(gridBytes + weightBytes + solveBytes, "the solve for " + std::to_string(nI) +
                                                      " interior nodes × " + std::to_string(m) +
-                                                     " cage vertices");
+                                                     " cage vertices needs");
   const double classifySeconds = since(t0);
 
   // 4. The 7-point Laplacian on the unknowns (its rows scaled by h²) and its right-hand sides.
@@ -387,7 +387,7 @@ Embedding bindHarmonic(const std::vector<Vec3>& points, const mesh::TriangleMesh
     triplets.emplace_back(r, r, diag);
   }
   std::stable_sort(rhs.begin(), rhs.end(),
-            [](const RhsEntry& x, const RhsEntry& y) { return x.column < y.column; });
+                   [](const RhsEntry& x, const RhsEntry& y) { return x.column < y.column; });
   Eigen::SparseMatrix<double> A(nI, nI);
   A.setFromTriplets(triplets.begin(), triplets.end());
   std::vector<Eigen::Triplet<double>>().swap(triplets);

@@ -272,6 +272,9 @@ TEST(Harmonic, TranslationMovesPointsByIt) {
   o.resolution = 16;
   HarmonicReport r;
   const Embedding e = bindHarmonic(points, cage, o, &r);
+  // The unit cube at 16: h = 1/16, 16 cells + 1 + 2·2 margin = 21 nodes per axis.
+  EXPECT_DOUBLE_EQ(r.cellSize, 1.0 / 16);
+  EXPECT_EQ(r.gridNodes, (std::array<int, 3>{21, 21, 21}));
   EXPECT_GT(r.closestPointPoints, 0);
   EXPECT_LT(r.maxSumError, 1e-9);  // outside points too
   EXPECT_GE(r.minWeight, -1e-12);
@@ -424,6 +427,16 @@ TEST(Harmonic, RefusesBadInputWithAClearMessage) {
   EXPECT_NE(big.find("need about"), std::string::npos) << big;
   EXPECT_NE(big.find("allowed"), std::string::npos) << big;
   EXPECT_THROW(bindHarmonic(points, good, o), std::runtime_error);
+
+  // A grid that fits (~6 MB at resolution 48 for the bunny cage) but a solve that does not
+  // (~150 MB: 28k unknowns × 164 cage vertices and the factor): refused after the
+  // classification, before the factorisation.
+  HarmonicOptions small;
+  small.resolution = 48;
+  small.maxBytes = 20u << 20;
+  const std::string solve = messageOf([&] { bindHarmonic(points, bunnyCage(), small); });
+  EXPECT_NE(solve.find("the solve for"), std::string::npos) << solve;
+  EXPECT_NE(solve.find("needs about"), std::string::npos) << solve;
 
   std::vector<Vec3> bad = {Vec3(0.1, 0.1, 0.1), Vec3(0.2, std::nan(""), 0.1)};
   EXPECT_NE(messageOf([&] { bindHarmonic(bad, good); }).find("point 1 is not finite"),
