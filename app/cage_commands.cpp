@@ -98,7 +98,7 @@ void addCommonOptions(CLI::App& app, std::string& cacheDir, int& threads, std::s
       ->check(CLI::IsMember({"mvc", "harmonic", "rbf"}));
   app.add_option("--resolution", method.resolution,
                  "harmonic: grid cells along the cage's longest side")
-      ->check(CLI::Range(4, 512));
+      ->check(CLI::Range(4, 64));
   app.add_option("--shape", method.shape,
                  "rbf: multiquadric shape s / mean nearest-handle distance")
       ->check(CLI::Range(0.0, 10.0));

@@ -21,6 +21,8 @@ std::array<std::uint64_t, 2> methodCacheKey(const std::vector<Vec3>& points,
     h.value(static_cast<std::uint64_t>(method.kind));
     if (method.kind == EmbeddingKind::Harmonic) {
       h.value(static_cast<std::int64_t>(method.harmonic.resolution));
+      h.value(static_cast<std::uint64_t>(method.harmonic.boundary));
+      h.value(static_cast<std::uint64_t>(method.harmonic.ordering));  // round-off differs
     } else if (method.kind == EmbeddingKind::Rbf) {
       h.value(method.rbf.shape);
     }

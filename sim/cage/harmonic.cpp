@@ -47,6 +47,59 @@ CagePoint closestCagePoint(const Vec3& x, const mesh::TriangleMesh& cage) {
   return best;
 }
 
+// Where the grid lines along one axis cross the cage. Line numbering for axis a, with
+// b = (a+1) mod 3 and c = (a+2) mod 3: index_b + dims_b · index_c. Each line is moved off its
+// nodes by a tiny irrational fraction of h (≈1e-7) across the axis, so that it passes through no
+// cage vertex or edge: a crossing is inside one triangle, counted once.
+struct Crossing {
+  std::int64_t line;
+  double t;      // coordinate along the axis (the cage's units)
+  int triangle;  // the triangle crossed
+  Vec3 bary;     // barycentric weights of the crossing point in it
+};
+struct AxisCrossings {
+  std::vector<Crossing> list;      // sorted by (line, t)
+  std::vector<std::size_t> start;  // per line, its first crossing; lines + 1 entries
+};
+AxisCrossings axisCrossings(int a, const mesh::TriangleMesh& cage, const Vec3& origin, double h,
+                            const std::array<int, 3>& dims) {
+  const int b = (a + 1) % 3, c = (a + 2) % 3;
+  const double db = h * 1.2345678e-7, dc = h * 0.8765432e-7;
+  const auto& V = cage.vertices;
+  AxisCrossings out;
+  for (int t = 0; t < static_cast<int>(cage.triangles.size()); ++t) {
+    const auto& tri = cage.triangles[size_t(t)];
+    const Vec3 &p0 = V[size_t(tri[0])], &p1 = V[size_t(tri[1])], &p2 = V[size_t(tri[2])];
+    const double blo = (std::min({p0[b], p1[b], p2[b]}) - origin[b] - db) / h;
+    const double bhi = (std::max({p0[b], p1[b], p2[b]}) - origin[b] - db) / h;
+    const double clo = (std::min({p0[c], p1[c], p2[c]}) - origin[c] - dc) / h;
+    const double chi = (std::max({p0[c], p1[c], p2[c]}) - origin[c] - dc) / h;
+    for (std::int64_t ic = std::max<std::int64_t>(0, std::int64_t(std::ceil(clo)));
+         ic <= std::min<std::int64_t>(dims[size_t(c)] - 1, std::int64_t(std::floor(chi))); ++ic)
+      for (std::int64_t ib = std::max<std::int64_t>(0, std::int64_t(std::ceil(blo)));
+           ib <= std::min<std::int64_t>(dims[size_t(b)] - 1, std::int64_t(std::floor(bhi))); ++ib) {
+        const double y = origin[b] + double(ib) * h + db, z = origin[c] + double(ic) * h + dc;
+        // Signed areas of the sub-triangles in the (b, c) plane.
+        auto orient = [&](const Vec3& p, const Vec3& q) {
+          return (p[b] - y) * (q[c] - z) - (p[c] - z) * (q[b] - y);
+        };
+        const double e0 = orient(p1, p2), e1 = orient(p2, p0), e2 = orient(p0, p1);
+        if (!((e0 > 0 && e1 > 0 && e2 > 0) || (e0 < 0 && e1 < 0 && e2 < 0))) continue;
+        const Vec3 w = Vec3(e0, e1, e2) / (e0 + e1 + e2);
+        out.list.push_back(
+            {ib + dims[size_t(b)] * ic, w[0] * p0[a] + w[1] * p1[a] + w[2] * p2[a], t, w});
+      }
+  }
+  std::sort(out.list.begin(), out.list.end(), [](const Crossing& x, const Crossing& y) {
+    return x.line != y.line ? x.line < y.line : x.t < y.t;
+  });
+  const std::int64_t lines = std::int64_t(dims[size_t(b)]) * dims[size_t(c)];
+  out.start.assign(size_t(lines) + 1, 0);
+  for (const Crossing& x : out.list) ++out.start[size_t(x.line) + 1];
+  for (std::int64_t l = 0; l < lines; ++l) out.start[size_t(l) + 1] += out.start[size_t(l)];
+  return out;
+}
+
 // Nested dissection of a set of grid nodes (ids i + nx·(j + ny·k)) for the 7-point stencil:
 // the plane through the middle of the set's box, across its longest side, separates the nodes
 // on either side (no stencil couples them), so they are numbered first, each half recursively,
@@ -127,7 +180,7 @@ Embedding bindHarmonic(const std::vector<Vec3>& points, const mesh::TriangleMesh
   // bytes); the solutions, right-hand side blocks and factor of the interior nodes (bounded by
   // the node count until they are known); the dense weights (double + float).
   auto refuse = [&](double bytes, const std::string& what) {
-    throw std::runtime_error("bindHarmonic: " + what + " need about " +
+    throw std::runtime_error("bindHarmonic: " + what + " about " +
                              formatBytes(std::uint64_t(bytes)) + ", more than the " +
                              formatBytes(options.maxBytes) + " allowed");
   };
@@ -138,7 +191,7 @@ Embedding bindHarmonic(const std::vector<Vec3>& points, const mesh::TriangleMesh
                                         std::to_string(dims[1]) + "×" + std::to_string(dims[2]) +
                                         " nodes (resolution " + std::to_string(options.resolution) +
                                         ") and " + std::to_string(n) + "×" + std::to_string(m) +
-                                        " dense weights");
+                                        " dense weights need");
   const Vec3 origin = box.center() - 0.5 * h * Vec3(dims[0] - 1, dims[1] - 1, dims[2] - 1);
   const std::int64_t nx = dims[0], ny = dims[1], nz = dims[2];
   const std::int64_t N = nx * ny * nz;
@@ -177,46 +230,24 @@ Embedding bindHarmonic(const std::vector<Vec3>& points, const mesh::TriangleMesh
         }
   }
 
-  // 2. Inside / outside by the parity of the crossings of a ray along +x through each row of
-  //    nodes. The ray is moved off the row by a tiny irrational fraction of h so that it passes
-  //    through no cage vertex or edge; that changes the answer only for nodes within ~1e-7·h of
-  //    the cage, which are boundary nodes whatever they are. A row with an odd crossing count
-  //    (a degenerate hit after all) falls back to the winding number per node.
-  const double dy = h * 1.2345678e-7, dz = h * 0.8765432e-7;
-  std::vector<std::pair<std::int64_t, double>> crossings;  // (row j + ny·k, x)
-  for (const auto& tri : T) {
-    const Vec3 &a = V[size_t(tri[0])], &b = V[size_t(tri[1])], &c = V[size_t(tri[2])];
-    const double jlo = (std::min({a.y(), b.y(), c.y()}) - origin.y() - dy) / h;
-    const double jhi = (std::max({a.y(), b.y(), c.y()}) - origin.y() - dy) / h;
-    const double klo = (std::min({a.z(), b.z(), c.z()}) - origin.z() - dz) / h;
-    const double khi = (std::max({a.z(), b.z(), c.z()}) - origin.z() - dz) / h;
-    for (std::int64_t k = std::max<std::int64_t>(0, std::int64_t(std::ceil(klo)));
-         k <= std::min<std::int64_t>(nz - 1, std::int64_t(std::floor(khi))); ++k)
-      for (std::int64_t j = std::max<std::int64_t>(0, std::int64_t(std::ceil(jlo)));
-           j <= std::min<std::int64_t>(ny - 1, std::int64_t(std::floor(jhi))); ++j) {
-        const double y = origin.y() + double(j) * h + dy, z = origin.z() + double(k) * h + dz;
-        // Signed areas of the sub-triangles in the yz plane.
-        auto orient = [&](const Vec3& p, const Vec3& q) {
-          return (p.y() - y) * (q.z() - z) - (p.z() - z) * (q.y() - y);
-        };
-        const double ea = orient(b, c), eb = orient(c, a), ec = orient(a, b);
-        if (!((ea > 0 && eb > 0 && ec > 0) || (ea < 0 && eb < 0 && ec < 0))) continue;
-        const double s = ea + eb + ec;
-        crossings.emplace_back(j + ny * k, (ea * a.x() + eb * b.x() + ec * c.x()) / s);
-      }
-  }
-  std::sort(crossings.begin(), crossings.end());
+  // 2. Inside / outside by the parity of the crossings of the grid lines along x (moved off the
+  //    nodes by ~1e-7·h, see axisCrossings: that changes the answer only for nodes within that
+  //    distance of the cage). A line with an odd crossing count (a degenerate hit after all)
+  //    falls back to the winding number per node.
+  AxisCrossings cross[3];
+  cross[0] = axisCrossings(0, cage, origin, h, dims);
+  const auto& crossings = cross[0].list;
   std::vector<unsigned char> inside(size_t(N), 0);
   for (std::size_t c0 = 0; c0 < crossings.size();) {
     std::size_t c1 = c0;
-    while (c1 < crossings.size() && crossings[c1].first == crossings[c0].first) ++c1;
-    const std::int64_t row = crossings[c0].first;
+    while (c1 < crossings.size() && crossings[c1].line == crossings[c0].line) ++c1;
+    const std::int64_t row = crossings[c0].line;
     const std::int64_t base = nx * row;
     if ((c1 - c0) % 2 == 0) {
       std::size_t c = c0;
       for (std::int64_t i = 0; i < nx; ++i) {
         const double x = origin.x() + double(i) * h;
-        while (c < c1 && crossings[c].second < x) ++c;
+        while (c < c1 && crossings[c].t < x) ++c;
         inside[size_t(base + i)] = static_cast<unsigned char>((c - c0) % 2);
       }
     } else {
@@ -232,16 +263,24 @@ Embedding bindHarmonic(const std::vector<Vec3>& points, const mesh::TriangleMesh
     c0 = c1;
   }
 
-  // 3. Unknowns: inside nodes farther than h from the cage. Each of their 6 neighbours is then
-  //    an unknown or lies within h of the cage (a segment of length h from an inside node to an
-  //    outside one crosses the cage), so it carries boundary values. Boundary nodes: every other
-  //    node within R = √3·h; with them every grid cell that meets the inside of the cage has
-  //    values at all 8 corners.
+  // 3. Unknowns. CutCell: every inside node; a stencil arm from an unknown to an outside node
+  //    ends at the cage, where the lines along y and z are crossed too (step 4). ClosestPoint:
+  //    inside nodes farther than h from the cage; each of their 6 neighbours is then an unknown
+  //    or lies within h of the cage (a segment of length h from an inside node to an outside one
+  //    crosses the cage), so it carries boundary values. Boundary nodes (both): every other node
+  //    within R = √3·h; with them every grid cell that meets the inside of the cage has values at
+  //    all 8 corners.
+  const bool cutCell = options.boundary == HarmonicBoundary::CutCell;
+  if (cutCell) {
+    cross[1] = axisCrossings(1, cage, origin, h, dims);
+    cross[2] = axisCrossings(2, cage, origin, h, dims);
+  }
+  const double unknownMinDistance = cutCell ? -1.0 : h;
   std::vector<int> unknown(size_t(N), -1);
   std::int64_t nB = 0;
   std::vector<std::int64_t> unknownNodes;
   for (std::int64_t id = 0; id < N; ++id) {
-    if (inside[size_t(id)] && dist[size_t(id)] > h)
+    if (inside[size_t(id)] && dist[size_t(id)] > unknownMinDistance)
       unknownNodes.push_back(id);
     else if (closestTri[size_t(id)] >= 0)
       ++nB;
@@ -260,17 +299,28 @@ Embedding bindHarmonic(const std::vector<Vec3>& points, const mesh::TriangleMesh
     for (std::int64_t r = 0; r < nI; ++r) unknown[size_t(order[size_t(r)])] = static_cast<int>(r);
   }
   // The solution (8 bytes per unknown and cage vertex), the right-hand-side blocks (16 columns
-  // per thread) and the factor (measured ≤ ~60 non-zeros per unknown at 64³, 12 bytes each,
-  // counted at 100).
-  const double solveBytes = 8.0 * double(nI) * (double(m) + 16.0 * threads) + 1200.0 * double(nI);
+  // per thread) and the factor: both orderings fill a 3-D grid with O(n^{4/3}) entries, measured
+  // 8.2·n^{4/3} (AMD) and 9.4·n^{4/3} (nested dissection) for the bunny cage at resolution 64;
+  // counted as 10·n^{4/3} entries of 12 bytes (value and row index) plus the matrix.
+  const double factorBytes = 120.0 * std::pow(double(nI), 4.0 / 3.0) + 100.0 * double(nI);
+  const double solveBytes = 8.0 * double(nI) * (double(m) + 16.0 * threads) + factorBytes;
   if (gridBytes + weightBytes + solveBytes > double(options.maxBytes))
     refuse(gridBytes + weightBytes + solveBytes, "the solve for " + std::to_string(nI) +
                                                      " interior nodes × " + std::to_string(m) +
-                                                     " cage vertices");
+                                                     " cage vertices needs");
   const double classifySeconds = since(t0);
 
-  // 4. The 7-point Laplacian on the unknowns (6 on the diagonal, −1 per unknown neighbour; SPD,
-  //    an M-matrix) and its right-hand sides: per boundary neighbour, its hat values.
+  // 4. The 7-point Laplacian on the unknowns (its rows scaled by h²) and its right-hand sides.
+  //    An arm to an unknown neighbour: u_i − u_q. An arm to a boundary node q (ClosestPoint, or
+  //    CutCell when no crossing is found on the arm, which only an inconsistent inside test
+  //    can cause): u_i − g_q, g_q = the hat values of q's closest cage point. CutCell: an arm
+  //    that leaves the cage at the fraction θ of its length ends at the crossing point, whose
+  //    hat values g are exact: the ghost value u_q = (g + (θ − 1)·u_i)/θ (linear extrapolation;
+  //    Gibou et al. 2002) gives (u_i − g)/θ. Either way the matrix is symmetric, positive
+  //    definite and an M-matrix (discrete maximum principle: w ≥ 0); CutCell reproduces linear
+  //    functions exactly (linear precision at the nodes) and converges like O(h²). θ is taken at
+  //    least kMinTheta, which moves a crossing closer than that by at most kMinTheta·h.
+  constexpr double kMinTheta = 1e-6;
   const auto tf = Clock::now();
   struct RhsEntry {
     int column, row;
@@ -280,32 +330,68 @@ Embedding bindHarmonic(const std::vector<Vec3>& points, const mesh::TriangleMesh
   std::vector<Eigen::Triplet<double>> triplets;
   triplets.reserve(size_t(nI) * 4);
   const std::int64_t step[3] = {1, nx, nx * ny};
+  std::int64_t cutArms = 0;
+  auto addHat = [&](int row, int t, const Vec3& w, double scale) {
+    for (int k = 0; k < 3; ++k)
+      if (w[k] != 0.0) rhs.push_back({T[size_t(t)][size_t(k)], row, scale * w[k]});
+  };
   for (std::int64_t id = 0; id < N; ++id) {
     const int r = unknown[size_t(id)];
     if (r < 0) continue;
-    triplets.emplace_back(r, r, 6.0);
+    const std::int64_t idx[3] = {id % nx, (id / nx) % ny, id / (nx * ny)};
+    double diag = 0.0;
     for (int a = 0; a < 3; ++a)
       for (int s = -1; s <= 1; s += 2) {
         const std::int64_t q = id + s * step[a];
         const int c = unknown[size_t(q)];
         if (c >= 0) {
+          diag += 1.0;
           if (c < r) triplets.emplace_back(r, c, -1.0);  // lower triangle only
           continue;
         }
-        const int t = closestTri[size_t(q)];
-        if (t < 0)
-          throw std::logic_error("bindHarmonic: an interior node has an unvalued neighbour");
-        for (int k = 0; k < 3; ++k)
-          if (bary[size_t(q)][k] != 0.0)
-            rhs.push_back({T[size_t(t)][size_t(k)], r, bary[size_t(q)][k]});
+        if (cutCell) {
+          const AxisCrossings& X = cross[a];
+          const std::int64_t line = idx[(a + 1) % 3] + dims[size_t((a + 1) % 3)] * idx[(a + 2) % 3];
+          const double ti = origin[a] + double(idx[a]) * h;
+          const auto first = X.list.begin() + std::ptrdiff_t(X.start[size_t(line)]);
+          const auto last = X.list.begin() + std::ptrdiff_t(X.start[size_t(line) + 1]);
+          auto byT = [](const Crossing& x, double t) { return x.t < t; };
+          auto it = std::lower_bound(first, last, ti, byT);  // first crossing at or after ti
+          const Crossing* hit = nullptr;
+          if (s > 0 && it != last && it->t <= ti + h * (1.0 + 1e-9)) hit = &*it;
+          if (s < 0) {
+            // The last crossing at or before ti.
+            auto jt = std::upper_bound(first, last, ti,
+                                       [](double t, const Crossing& x) { return t < x.t; });
+            if (jt != first && std::prev(jt)->t >= ti - h * (1.0 + 1e-9)) hit = &*std::prev(jt);
+          }
+          if (hit) {
+            const double theta = std::max(std::abs(hit->t - ti) / h, kMinTheta);
+            diag += 1.0 / theta;
+            addHat(r, hit->triangle, hit->bary, 1.0 / theta);
+            ++cutArms;
+            continue;
+          }
+        }
+        diag += 1.0;
+        if (closestTri[size_t(q)] >= 0) {
+          addHat(r, closestTri[size_t(q)], bary[size_t(q)], 1.0);
+        } else {
+          // Only reachable through an inconsistent inside test (CutCell): q is farther than
+          // √3·h from the cage, so its closest point was not recorded.
+          const CagePoint cp =
+              closestCagePoint(nodePos(q % nx, (q / nx) % ny, q / (nx * ny)), cage);
+          addHat(r, cp.triangle, cp.bary, 1.0);
+        }
       }
+    triplets.emplace_back(r, r, diag);
   }
-  std::sort(rhs.begin(), rhs.end(),
-            [](const RhsEntry& x, const RhsEntry& y) { return x.column < y.column; });
+  std::stable_sort(rhs.begin(), rhs.end(),
+                   [](const RhsEntry& x, const RhsEntry& y) { return x.column < y.column; });
   Eigen::SparseMatrix<double> A(nI, nI);
   A.setFromTriplets(triplets.begin(), triplets.end());
   std::vector<Eigen::Triplet<double>>().swap(triplets);
-  // The unknowns are already numbered in nested-dissection order (or AMD is asked for).
+  // With NestedDissection the unknowns are already numbered in elimination order.
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::NaturalOrdering<int>>
       ldltNatural;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::AMDOrdering<int>> ldltAmd;
@@ -402,6 +488,7 @@ Embedding bindHarmonic(const std::vector<Vec3>& points, const mesh::TriangleMesh
   rep.cellSize = h;
   rep.interiorNodes = nI;
   rep.boundaryNodes = nB;
+  rep.cutArms = cutArms;
   rep.factorNonZeros = nI == 0 ? 0
                        : amd   ? ldltAmd.matrixL().nestedExpression().nonZeros()
                                : ldltNatural.matrixL().nestedExpression().nonZeros();

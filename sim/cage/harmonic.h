@@ -20,15 +20,29 @@
 namespace sb::cage {
 
 // Order in which the sparse LDLᵀ factorisation eliminates the grid's unknowns.
+// Measured on the bunny cage (README.md): AMD was as fast or faster in 5 of 6 configurations.
 enum class HarmonicOrdering {
-  NestedDissection,  // geometric nested dissection of the grid (default: least fill, fastest)
-  Amd,               // Eigen's approximate minimum degree
+  Amd,               // Eigen's approximate minimum degree (default)
+  NestedDissection,  // geometric nested dissection of the grid (mid-planes of the box)
+};
+
+// How the cage's boundary values enter the grid (README.md, "Harmonic coordinates").
+enum class HarmonicBoundary {
+  // Every inside node is an unknown; a stencil arm that leaves the cage ends at the crossing
+  // point, with the exact hat values there (linear ghost value, Gibou et al. 2002). Linear
+  // precision exact at the nodes, weights converge like O(h²).
+  CutCell,
+  // Nodes within one cell of the cage are fixed to the hat values of their closest cage point
+  // (Joshi et al.'s voxelised boundary). Weights and linear precision converge like O(h).
+  ClosestPoint,
 };
 
 struct HarmonicOptions {
   // Grid cells along the longest axis of the cage's bounding box (cubic cells), ≥ 4. The bind's
-  // error (linear precision, distance to the exact coordinates) is about one cell.
-  int resolution = 64;
+  // error (linear precision, distance to the exact coordinates) is about one cell (CutCell: far
+  // less inside, README.md). 32 by default: a 164-vertex cage binds in ~0.5 s there, and the
+  // cost grows like resolution⁶ (~40 s at 64; Eigen's sparse Cholesky is one column at a time).
+  int resolution = 32;
   // Threads for the solve and the lookup, at most threadCount() (0 = threadCount();
   // sim/base/parallel.h). The weights do not depend on it.
   int threads = 0;
@@ -37,16 +51,19 @@ struct HarmonicOptions {
   // factor, and the dense weights). A bind that would exceed it is refused with the figure
   // (std::runtime_error).
   std::uint64_t maxBytes = std::uint64_t(4) << 30;
-  HarmonicOrdering ordering = HarmonicOrdering::NestedDissection;
+  HarmonicBoundary boundary = HarmonicBoundary::CutCell;
+  HarmonicOrdering ordering = HarmonicOrdering::Amd;
   bool keepDoublePrecision = true;  // keep the double weights in the Embedding (deformDouble)
 };
 
 // Figures of a harmonic bind (the common ones are also in the Embedding's BindStats).
 struct HarmonicReport {
-  std::array<int, 3> gridNodes{};   // nodes along x, y, z (cells + 1 + 2 margin cells)
-  double cellSize = 0.0;            // grid spacing h (the cage's units)
-  std::int64_t interiorNodes = 0;   // unknowns of the Laplace system (inside, farther than h)
-  std::int64_t boundaryNodes = 0;   // nodes given the boundary values (within √3·h of the cage)
+  std::array<int, 3> gridNodes{};  // nodes along x, y, z (cells + 1 + 2 margin cells)
+  double cellSize = 0.0;           // grid spacing h (the cage's units)
+  // Unknowns of the Laplace system: the inside nodes (ClosestPoint: farther than h from the cage).
+  std::int64_t interiorNodes = 0;
+  std::int64_t boundaryNodes = 0;  // other nodes given boundary values (within √3·h of the cage)
+  std::int64_t cutArms = 0;        // CutCell: stencil arms ending at a cage crossing
   std::int64_t factorNonZeros = 0;  // non-zeros of the LDLᵀ factor L
   double classifySeconds = 0.0;     // distances and inside/outside of the nodes
   double factorSeconds = 0.0;       // assembly + sparse LDLᵀ factorisation (AMD ordering)

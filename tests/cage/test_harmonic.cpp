@@ -15,6 +15,7 @@
 #include "sim/cage/harmonic.h"
 #include "sim/cage/interior_points.h"
 #include "sim/mesh/closed_surface.h"
+#include "sim/mesh/closest_point.h"
 #include "sim/mesh/mesh_io.h"
 #include "tests/mesh/mesh_fixtures.h"
 
@@ -91,10 +92,10 @@ double tetError(const Embedding& e, const std::vector<Vec3>& points) {
 }
 
 // Tetrahedron: its barycentric coordinates are linear (so harmonic) and equal the hat functions
-// on its faces, so they are its harmonic coordinates. The grid solution's error comes from the
-// boundary values taken at the closest cage point instead of at the node (O(h)), and must fall
-// with the cell size.
-TEST(Harmonic, TetrahedronGivesBarycentricCoordinatesConvergingWithResolution) {
+// on its faces, so they are its harmonic coordinates.
+// ClosestPoint: the boundary values are taken at the closest cage point instead of at the node
+// (O(h) error), which must fall like the cell size.
+TEST(Harmonic, TetrahedronClosestPointBoundaryConvergesFirstOrder) {
   const TriangleMesh cage = tetrahedron();
   const auto points = randomTetPoints(300, 0.05, 1);
   double previous = std::numeric_limits<double>::infinity();
@@ -102,27 +103,64 @@ TEST(Harmonic, TetrahedronGivesBarycentricCoordinatesConvergingWithResolution) {
   for (int res : {12, 24, 48}) {
     HarmonicOptions o;
     o.resolution = res;
+    o.boundary = HarmonicBoundary::ClosestPoint;
     const double err = tetError(bindHarmonic(points, cage, o), points);
-    std::printf("tetrahedron res %d: max |w - barycentric| = %.3g, order %.2f\n", res, err,
-                std::log2(previous / err));
+    std::printf("tetrahedron, closest point, res %d: max |w - barycentric| = %.3g, order %.2f\n",
+                res, err, std::log2(previous / err));
     EXPECT_LT(err, 0.6 * previous) << "resolution " << res;
     previous = err;
   }
   EXPECT_LT(previous, 0.025);
 }
 
+// CutCell: the 7-point stencil with linear ghost values reproduces linear functions exactly, so
+// the grid values are the barycentric coordinates (up to the θ ≥ 1e-6 clamp) and so is their
+// trilinear interpolation in every cell whose corners are all inside: points farther than a
+// cell diagonal from the faces. Nearer the faces (cells with outside corners, which carry
+// closest-point values) the error must still fall with the cell size.
+TEST(Harmonic, TetrahedronCutCellBoundaryIsExactAwayFromTheFaces) {
+  const TriangleMesh cage = tetrahedron();
+  // Barycentric coordinates ≥ 0.15: ≥ 0.15/√3 = 0.087 from every face, more than √3·h at 24.
+  const auto deep = randomTetPoints(300, 0.15, 1);
+  for (int res : {24, 32}) {
+    HarmonicOptions o;
+    o.resolution = res;
+    const double err = tetError(bindHarmonic(deep, cage, o), deep);
+    std::printf("tetrahedron, cut cell, res %d, deep points: max |w - barycentric| = %.3g\n", res,
+                err);
+    EXPECT_LT(err, 1e-6) << "resolution " << res;
+  }
+  const auto near = randomTetPoints(300, 0.0, 4);
+  double previous = std::numeric_limits<double>::infinity();
+  // Measured 0.022, 0.010, 0.006 at 12, 24, 48.
+  for (int res : {8, 16, 32}) {
+    HarmonicOptions o;
+    o.resolution = res;
+    const double err = tetError(bindHarmonic(near, cage, o), near);
+    std::printf("tetrahedron, cut cell, res %d, all points: max |w - barycentric| = %.3g\n", res,
+                err);
+    EXPECT_LT(err, 0.7 * previous) << "resolution " << res;
+    previous = err;
+  }
+}
+
 // Σw = 1, w ≥ 0 and linear precision on the bunny cage at points inside it; linear precision
 // improves under refinement.
-TEST(Harmonic, BunnyCagePartitionOfUnityPositivityAndLinearPrecisionConverge) {
+class BunnyCage : public ::testing::TestWithParam<HarmonicBoundary> {};
+
+TEST_P(BunnyCage, PartitionOfUnityPositivityAndLinearPrecisionConverge) {
   const TriangleMesh cage = bunnyCage();
   const auto points = interiorLattice(cage, 0.02 * mesh::testing::diagonal(cage));
   ASSERT_GT(points.size(), 500u);
   const auto C = cageMatrix(cage);
   double previous = std::numeric_limits<double>::infinity();
-  // Measured linear error 0.037, 0.016, 0.0088 (of the diagonal) at 16, 32, 64: first order.
+  // Measured linear error (of the diagonal) at 8, 16, 32: ClosestPoint 0.072, 0.037, 0.016
+  // (first order; 0.0088 at 64), CutCell 0.017, 0.0053, 0.0011 (the error left is in the cells
+  // next to the cage, whose outside corners carry closest-point values).
   for (int res : {8, 16, 32}) {
     HarmonicOptions o;
     o.resolution = res;
+    o.boundary = GetParam();
     HarmonicReport r;
     const Embedding e = bindHarmonic(points, cage, o, &r);
     ASSERT_EQ(e.meshVertexCount(), static_cast<int>(points.size()));
@@ -143,7 +181,9 @@ TEST(Harmonic, BunnyCagePartitionOfUnityPositivityAndLinearPrecisionConverge) {
     }
     linErr /= mesh::testing::diagonal(cage);
     std::printf(
-        "bunny res %d: unknowns %lld, sum err %.3g, min w %.3g, linear err %.3g, order %.2f\n", res,
+        "bunny, %s, res %d: unknowns %lld, sum err %.3g, min w %.3g, linear err %.3g, "
+        "order %.2f\n",
+        GetParam() == HarmonicBoundary::CutCell ? "cut cell" : "closest point", res,
         static_cast<long long>(r.interiorNodes), sumErr, minW, linErr,
         std::log2(previous / linErr));
     EXPECT_LT(sumErr, 1e-9);
@@ -155,6 +195,42 @@ TEST(Harmonic, BunnyCagePartitionOfUnityPositivityAndLinearPrecisionConverge) {
     EXPECT_LT(linErr, 0.6 * previous) << "resolution " << res;
     previous = linErr;
   }
+}
+
+INSTANTIATE_TEST_SUITE_P(Harmonic, BunnyCage,
+                         ::testing::Values(HarmonicBoundary::CutCell,
+                                           HarmonicBoundary::ClosestPoint));
+
+// CutCell: linear precision is exact (to the θ clamp) at every point whose grid cell has all 8
+// corners inside the cage, i.e. at points farther than a cell diagonal from it (distance
+// computed here by brute force over the triangles).
+TEST(Harmonic, CutCellLinearPrecisionIsExactAwayFromTheCage) {
+  const TriangleMesh cage = bunnyCage();
+  const double L = mesh::testing::diagonal(cage);
+  HarmonicOptions o;
+  o.resolution = 24;
+  HarmonicReport r;
+  bindHarmonic({Vec3::Zero()}, cage, o, &r);  // for the cell size
+  const double h = r.cellSize;
+  std::vector<Vec3> deep;
+  for (const Vec3& p : interiorLattice(cage, 0.02 * L)) {
+    double d = std::numeric_limits<double>::infinity();
+    for (const auto& t : cage.triangles) {
+      const Vec3 &a = cage.vertices[size_t(t[0])], &b = cage.vertices[size_t(t[1])],
+                 &c = cage.vertices[size_t(t[2])];
+      const auto cp = mesh::closestPointOnTriangle<double>(p, a, b, c);
+      d = std::min(d, (cp.weights[0] * a + cp.weights[1] * b + cp.weights[2] * c - p).norm());
+    }
+    if (d > 1.01 * std::sqrt(3.0) * h) deep.push_back(p);
+  }
+  ASSERT_GT(deep.size(), 100u);
+  const Embedding e = bindHarmonic(deep, cage, o, &r);
+  std::printf("bunny, cut cell, res 24, %zu deep points: linear error %.3g of the diagonal\n",
+              deep.size(), r.maxLinearError);
+  EXPECT_LT(r.maxLinearError, 1e-7);
+  EXPECT_LT(r.maxSumError, 1e-9);
+  EXPECT_GE(r.minWeight, -1e-12);
+  EXPECT_EQ(r.closestPointPoints, 0);
 }
 
 // Across the gap of a U: a vertex at the tip of one prong has next to no influence on a point in
@@ -196,6 +272,9 @@ TEST(Harmonic, TranslationMovesPointsByIt) {
   o.resolution = 16;
   HarmonicReport r;
   const Embedding e = bindHarmonic(points, cage, o, &r);
+  // The unit cube at 16: h = 1/16, 16 cells + 1 + 2·2 margin = 21 nodes per axis.
+  EXPECT_DOUBLE_EQ(r.cellSize, 1.0 / 16);
+  EXPECT_EQ(r.gridNodes, (std::array<int, 3>{21, 21, 21}));
   EXPECT_GT(r.closestPointPoints, 0);
   EXPECT_LT(r.maxSumError, 1e-9);  // outside points too
   EXPECT_GE(r.minWeight, -1e-12);
@@ -227,14 +306,15 @@ TEST(Harmonic, ThreadCountDoesNotChangeTheWeights) {
 }
 
 // The nested-dissection numbering of the unknowns only reorders the same system: the weights
-// must match those of Eigen's AMD ordering (to round-off), and the grid must be solved at all
-// (both far from the tetrahedron's barycentric coordinates would be a bug in both).
+// must match those of Eigen's AMD ordering to round-off (a node numbered twice or skipped would
+// change them), on a grid with enough unknowns for several levels of dissection.
 TEST(Harmonic, NestedDissectionAndAmdOrderingsGiveTheSameWeights) {
   const TriangleMesh cage = bunnyCage();
   const auto points = interiorLattice(cage, 0.05 * mesh::testing::diagonal(cage));
   HarmonicOptions o;
   o.resolution = 24;
   HarmonicReport rn, ra;
+  o.ordering = HarmonicOrdering::NestedDissection;
   const Embedding nd = bindHarmonic(points, cage, o, &rn);
   o.ordering = HarmonicOrdering::Amd;
   const Embedding amd = bindHarmonic(points, cage, o, &ra);
@@ -250,6 +330,56 @@ TEST(Harmonic, NestedDissectionAndAmdOrderingsGiveTheSameWeights) {
       worst = std::max(worst, std::abs(a[k].second - b[k].second));
   }
   EXPECT_LT(worst, 1e-12);
+}
+
+// Points on the cage get (to the discretisation error) the hat functions there; points far
+// outside get exactly the hat functions of their closest cage point; the smallest resolution
+// still gives a partition of unity.
+TEST(Harmonic, PointsOnAndOutsideTheCage) {
+  const TriangleMesh cage = tetrahedron();
+  // On the faces: one barycentric coordinate 0.
+  std::vector<Vec3> onFaces;
+  for (int i = 0; i < 40; ++i) {
+    Vec3 p = randomTetPoints(1, 0.0, 100u + unsigned(i))[0];
+    if (i % 4 < 3)
+      p[i % 4] = 0.0;  // on the face x = 0, y = 0 or z = 0
+    else
+      p /= p.sum();  // on the slanted face
+    onFaces.push_back(p);
+  }
+  double previous = std::numeric_limits<double>::infinity();
+  for (int res : {16, 32}) {
+    HarmonicOptions o;
+    o.resolution = res;
+    const double err = tetError(bindHarmonic(onFaces, cage, o), onFaces);
+    EXPECT_LT(err, 2.0 / res) << "resolution " << res;  // about a cell
+    EXPECT_LT(err, 0.7 * previous);
+    previous = err;
+  }
+
+  const std::vector<Vec3> far = {Vec3(2, 2, 2), Vec3(-3, 0.25, 0.25), Vec3(0.5, 0.25, -4)};
+  HarmonicOptions o;
+  o.resolution = 8;
+  HarmonicReport r;
+  const Embedding e = bindHarmonic(far, cage, o, &r);
+  EXPECT_EQ(r.closestPointPoints, 3);
+  // Closest points: (1/3, 1/3, 1/3) on the slanted face, (0, 0.25, 0.25) on x = 0,
+  // (0.5, 0.25, 0) on z = 0; their barycentric coordinates (w0, w1, w2, w3).
+  const double expected[3][4] = {
+      {0, 1.0 / 3, 1.0 / 3, 1.0 / 3}, {0.5, 0, 0.25, 0.25}, {0.25, 0.5, 0.25, 0}};
+  std::vector<std::pair<int, double>> row;
+  for (int i = 0; i < 3; ++i) {
+    e.rowWeights(i, row);
+    double w[4] = {0, 0, 0, 0};
+    for (const auto& [j, v] : row) w[j] = v;
+    for (int j = 0; j < 4; ++j) EXPECT_NEAR(w[j], expected[i][j], 1e-12) << i << " " << j;
+  }
+
+  o.resolution = 4;
+  const auto inside = randomTetPoints(20, 0.0, 9);
+  const Embedding coarse = bindHarmonic(inside, cage, o, &r);
+  EXPECT_LT(r.maxSumError, 1e-12);
+  EXPECT_GE(r.minWeight, 0.0);
 }
 
 std::string messageOf(const std::function<void()>& f) {
@@ -274,7 +404,8 @@ TEST(Harmonic, RefusesBadInputWithAClearMessage) {
   TriangleMesh inverted = good;
   for (auto& t : inverted.triangles) std::swap(t[1], t[2]);
   EXPECT_THROW(bindHarmonic(points, inverted), mesh::SurfaceError);
-  EXPECT_NE(messageOf([&] { bindHarmonic(points, inverted); }).find("cage:"), std::string::npos);
+  EXPECT_NE(messageOf([&] { bindHarmonic(points, inverted); }).find("cage: inverted"),
+            std::string::npos);
 
   // Two tetrahedra sharing a vertex (the second is the first reflected through vertex 0, which
   // reverses orientation, so its triangles are flipped back): a non-manifold vertex.
@@ -296,6 +427,16 @@ TEST(Harmonic, RefusesBadInputWithAClearMessage) {
   EXPECT_NE(big.find("need about"), std::string::npos) << big;
   EXPECT_NE(big.find("allowed"), std::string::npos) << big;
   EXPECT_THROW(bindHarmonic(points, good, o), std::runtime_error);
+
+  // A grid that fits (~6 MB at resolution 48 for the bunny cage) but a solve that does not
+  // (~150 MB: 28k unknowns × 164 cage vertices and the factor): refused after the
+  // classification, before the factorisation.
+  HarmonicOptions small;
+  small.resolution = 48;
+  small.maxBytes = 20u << 20;
+  const std::string solve = messageOf([&] { bindHarmonic(points, bunnyCage(), small); });
+  EXPECT_NE(solve.find("the solve for"), std::string::npos) << solve;
+  EXPECT_NE(solve.find("needs about"), std::string::npos) << solve;
 
   std::vector<Vec3> bad = {Vec3(0.1, 0.1, 0.1), Vec3(0.2, std::nan(""), 0.1)};
   EXPECT_NE(messageOf([&] { bindHarmonic(bad, good); }).find("point 1 is not finite"),

@@ -282,7 +282,7 @@ def test_bind_methods():
         assert np.abs(moved - (points @ a.T + [1.0, 2.0, 3.0])).max() < tol, method
     with pytest.raises(ValueError, match="method must be"):
         sb.bind(points, cage_v, cage_f, method="ffd-bspline")
-    with pytest.raises(ValueError, match=r"resolution must be in \[4, 256\]"):
+    with pytest.raises(ValueError, match=r"resolution must be in \[4, 64\]"):
         sb.bind(points, cage_v, cage_f, method="harmonic", resolution=2)
     with pytest.raises(ValueError, match=r"shape must be in \[0, 10\]"):
         sb.bind(points, cage_v, cage_f, method="rbf", shape=-1.0)

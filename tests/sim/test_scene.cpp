@@ -424,7 +424,7 @@ TEST(Scene, EmbeddingErrorsNameTheField) {
   expectSceneError(body(render + R"(, "embedding": {"method": "rbf", "shape": 11})"),
                    "bodies[0].embedding.shape: must be in [0, 10], got 11");
   expectSceneError(body(render + R"(, "embedding": {"method": "harmonic", "resolution": 3})"),
-                   "bodies[0].embedding.resolution: must be in [4, 256], got 3");
+                   "bodies[0].embedding.resolution: must be in [4, 64], got 3");
   expectSceneError(body(render + R"(, "embedding": {"method": "harmonic", "resolutoin": 8})"),
                    "bodies[0].embedding.resolutoin: unknown field");
   expectSceneError(body(R"(, "embedding": "rbf")"),
