@@ -135,13 +135,26 @@ Embedding Embedding::fromDense(DenseD weights, bool keepDouble) {
   return e;
 }
 
-Embedding Embedding::fromSparse(SparseD weights, bool keepDouble) {
+void Embedding::swap(Embedding& other) noexcept {
+  std::swap(rows_, other.rows_);
+  std::swap(cols_, other.cols_);
+  std::swap(kind_, other.kind_);
+  std::swap(sparse_, other.sparse_);
+  std::swap(hasDouble_, other.hasDouble_);
+  denseD_.swap(other.denseD_);
+  denseF_.swap(other.denseF_);
+  sparseD_.swap(other.sparseD_);
+  sparseF_.swap(other.sparseF_);
+  std::swap(stats_, other.stats_);
+}
+
+Embedding Embedding::fromSparse(SparseD&& weights, bool keepDouble) {
   Embedding e;
   weights.makeCompressed();
   e.rows_ = static_cast<int>(weights.rows());
   e.cols_ = static_cast<int>(weights.cols());
   e.sparse_ = true;
-  e.sparseD_ = std::move(weights);
+  e.sparseD_.swap(weights);  // Eigen 3.4's sparse move-assignment copies
   e.hasDouble_ = true;
   e.makeFloat();
   if (!keepDouble) {
@@ -154,8 +167,17 @@ Embedding Embedding::fromSparse(SparseD weights, bool keepDouble) {
 
 void Embedding::makeFloat() {
   if (sparse_) {
-    sparseF_ = sparseD_.cast<float>();
-    sparseF_.makeCompressed();
+    // The same compressed structure with float values, filled in place: a cast<float>() builds
+    // it through a generic sparse assignment that reallocates as it goes (most of an FFD bind's
+    // time went there).
+    const Eigen::Index nnz = sparseD_.nonZeros();
+    sparseF_ = SparseF(rows_, cols_);
+    sparseF_.resizeNonZeros(nnz);
+    std::copy(sparseD_.outerIndexPtr(), sparseD_.outerIndexPtr() + rows_ + 1,
+              sparseF_.outerIndexPtr());
+    std::copy(sparseD_.innerIndexPtr(), sparseD_.innerIndexPtr() + nnz, sparseF_.innerIndexPtr());
+    std::transform(sparseD_.valuePtr(), sparseD_.valuePtr() + nnz, sparseF_.valuePtr(),
+                   [](double w) { return static_cast<float>(w); });
   } else {
     denseF_ = denseD_.cast<float>();
   }

@@ -89,9 +89,19 @@ class Embedding {
   using DenseF = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
   Embedding() = default;
+  Embedding(const Embedding&) = default;
+  Embedding& operator=(const Embedding&) = default;
+  // Moves swap: Eigen 3.4's SparseMatrix has no move constructor, so the implicit moves copied
+  // the sparse weights (77 MB for 100k points in a B-spline lattice) at every return.
+  Embedding(Embedding&& other) noexcept { swap(other); }
+  Embedding& operator=(Embedding&& other) noexcept {
+    swap(other);
+    return *this;
+  }
+  void swap(Embedding& other) noexcept;
   // Any linear embedding (e.g. other coordinate types) can be wrapped.
   static Embedding fromDense(DenseD weights, bool keepDouble = true);
-  static Embedding fromSparse(SparseD weights, bool keepDouble = true);
+  static Embedding fromSparse(SparseD&& weights, bool keepDouble = true);  // takes weights' storage
 
   // What the weights are (set by the bind that made them; fromDense/fromSparse: MeanValue).
   EmbeddingKind kind() const { return kind_; }
