@@ -10,24 +10,14 @@
 #include "sim/cage/fold_check.h"
 #include "sim/cage/rbf.h"
 #include "sim/mesh/mesh_io.h"
+#include "tests/cage/cage_test_data.h"
 #include "tests/mesh/mesh_fixtures.h"
 
 namespace sb::cage {
 namespace {
 
 using MatX3d = Eigen::Matrix<double, Eigen::Dynamic, 3>;
-
-MatX3d toMatrix(const std::vector<Vec3>& v) {
-  MatX3d m(static_cast<Eigen::Index>(v.size()), 3);
-  for (std::size_t i = 0; i < v.size(); ++i) m.row(Eigen::Index(i)) = v[i].transpose();
-  return m;
-}
-
-const mesh::TriangleMesh& bunnyCage() {
-  static const mesh::TriangleMesh c =
-      mesh::readMesh(std::string(SOFTBODY_TEST_MESH_DIR) + "/bunny_cage.obj");
-  return c;
-}
+using namespace test_data;
 
 FoldProbes mvcProbes(const mesh::TriangleMesh& cage, int target = 600) {
   const FoldSampling s = foldSamples(cage, target);

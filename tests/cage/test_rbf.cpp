@@ -11,6 +11,7 @@
 
 #include "sim/cage/rbf.h"
 #include "sim/mesh/mesh_io.h"
+#include "tests/cage/cage_test_data.h"
 #include "tests/mesh/mesh_fixtures.h"
 #include "tests/support/temp_dir_test.h"
 
@@ -18,23 +19,7 @@ namespace sb::cage {
 namespace {
 
 using MatX3d = Eigen::Matrix<double, Eigen::Dynamic, 3>;
-
-MatX3d toMatrix(const std::vector<Vec3>& v) {
-  MatX3d m(static_cast<Eigen::Index>(v.size()), 3);
-  for (std::size_t i = 0; i < v.size(); ++i) m.row(Eigen::Index(i)) = v[i].transpose();
-  return m;
-}
-
-const mesh::TriangleMesh& bunnyCage() {
-  static const mesh::TriangleMesh c =
-      mesh::readMesh(std::string(SOFTBODY_TEST_MESH_DIR) + "/bunny_cage.obj");
-  return c;
-}
-const mesh::TriangleMesh& bunny() {
-  static const mesh::TriangleMesh c =
-      mesh::readMesh(std::string(SOFTBODY_TEST_MESH_DIR) + "/bunny.obj");
-  return c;
-}
+using namespace test_data;
 
 std::vector<Vec3> randomPoints(int n, double lo, double hi, unsigned seed) {
   std::mt19937 rng(seed);
