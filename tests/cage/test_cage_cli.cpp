@@ -156,6 +156,62 @@ TEST_F(Cli, RunChecksForFolds) {
   EXPECT_NE(bare.err.find("no render meshes to check"), std::string::npos) << bare.err;
 }
 
+// softbody ffd: the written rest lattice (x fastest) moved by an affine map moves the mesh by
+// it; a node pushed four spacings past its neighbours is reported as a fold at the vertices
+// there; mismatched lattices and bad options are refused.
+TEST_F(Cli, FfdWritesALatticeAndDeformsWithTheMovedOne) {
+  const std::string mesh = kMeshDir + "/suzanne.obj";
+  const std::string lattice = " --mesh " + mesh + " --nodes 5,5,5";
+  const ProcessResult w = run("ffd" + lattice + " --write-lattice " + path("rest.obj"));
+  ASSERT_EQ(w.code, 0) << w.err;
+  const TriangleMesh rest = readMesh(path("rest.obj"));
+  ASSERT_EQ(rest.vertices.size(), 125u);
+  EXPECT_LT(rest.vertices[0].x(), rest.vertices[1].x());  // x fastest
+  EXPECT_EQ(rest.vertices[0].y(), rest.vertices[1].y());
+  const Eigen::Matrix3d A =
+      (Eigen::Matrix3d() << 1.2, 0.1, 0.0, 0.0, 0.9, 0.0, 0.3, 0.0, 1.0).finished();
+  const Vec3 t(1, 0, 0);
+  TriangleMesh moved = rest;
+  for (auto& v : moved.vertices) v = A * v + t;
+  writeObj(path("moved.obj"), moved);
+  for (const char* how : {"", " --de-boor"}) {
+    const ProcessResult d = run("ffd" + lattice + " --deformed-lattice " + path("moved.obj") +
+                                " --out " + path("out.obj") + how);
+    ASSERT_EQ(d.code, 0) << d.err;
+    EXPECT_NE(d.out.find("folds:     none"), std::string::npos) << d.out;
+    const TriangleMesh original = readMesh(mesh), out = readMesh(path("out.obj"));
+    ASSERT_EQ(out.vertices.size(), original.vertices.size());
+    EXPECT_EQ(out.triangles, original.triangles);
+    double err = 0.0;
+    for (size_t i = 0; i < out.vertices.size(); ++i)
+      err = std::max(err, (out.vertices[i] - (A * original.vertices[i] + t)).norm());
+    EXPECT_LT(err, 1e-9) << how;
+  }
+  TriangleMesh pushed = rest;
+  const double spacing = rest.vertices[1].x() - rest.vertices[0].x();
+  pushed.vertices[62].x() += 4.0 * spacing;  // the centre node (2, 2, 2)
+  writeObj(path("pushed.obj"), pushed);
+  const ProcessResult f = run("ffd" + lattice + " --deformed-lattice " + path("pushed.obj"));
+  ASSERT_EQ(f.code, 0) << f.err;
+  EXPECT_NE(f.out.find("one-to-one: not guaranteed"), std::string::npos) << f.out;
+  EXPECT_NE(f.out.find("vertices where the map folds"), std::string::npos) << f.out;
+
+  const ProcessResult count =
+      run("ffd --mesh " + mesh + " --nodes 4,5,5 --deformed-lattice " + path("moved.obj"));
+  EXPECT_EQ(count.code, 1);
+  EXPECT_NE(count.err.find("has 125 vertices but the lattice has 100 nodes"), std::string::npos)
+      << count.err;
+  const ProcessResult few = run("ffd --mesh " + mesh + " --nodes 3,5,5");
+  EXPECT_EQ(few.code, 1);
+  EXPECT_NE(few.err.find("at least 4 nodes per axis"), std::string::npos) << few.err;
+  const ProcessResult two = run("ffd --mesh " + mesh + " --nodes 5,5");
+  EXPECT_EQ(two.code, 2);
+  const ProcessResult out = run("ffd" + lattice + " --out " + path("x.obj"));
+  EXPECT_EQ(out.code, 2);
+  EXPECT_NE(out.err.find("--out needs --deformed-lattice"), std::string::npos) << out.err;
+  EXPECT_FALSE(fs::exists(path("x.obj")));
+}
+
 TEST_F(Cli, ErrorsAreClearAndNonZero) {
   const std::string mesh = kMeshDir + "/bunny.obj", cage = kMeshDir + "/bunny_cage.obj";
   // Missing file.
