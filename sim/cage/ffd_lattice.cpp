@@ -238,6 +238,38 @@ FfdNodes FfdLattice::restNodes() const {
   return P;
 }
 
+std::vector<std::array<int, 3>> FfdLattice::boundaryTriangles() const {
+  validate();
+  std::vector<std::array<int, 3>> out;
+  for (int a = 0; a < 3; ++a) {
+    // (u, v) = the other two axes in cyclic order, so û × v̂ = â: kept on the far side (outward
+    // +â), reversed on the near side (outward −â).
+    const int u = (a + 1) % 3, v = (a + 2) % 3;
+    for (const int side : {0, nodes[size_t(a)] - 1}) {
+      for (int q = 0; q + 1 < nodes[size_t(v)]; ++q) {
+        for (int p = 0; p + 1 < nodes[size_t(u)]; ++p) {
+          auto at = [&](int pu, int qv) {
+            std::array<int, 3> ijk{};
+            ijk[size_t(a)] = side;
+            ijk[size_t(u)] = pu;
+            ijk[size_t(v)] = qv;
+            return nodeIndex(ijk[0], ijk[1], ijk[2]);
+          };
+          const int c00 = at(p, q), c10 = at(p + 1, q), c11 = at(p + 1, q + 1), c01 = at(p, q + 1);
+          if (side > 0) {
+            out.push_back({c00, c10, c11});
+            out.push_back({c00, c11, c01});
+          } else {
+            out.push_back({c00, c11, c10});
+            out.push_back({c00, c01, c11});
+          }
+        }
+      }
+    }
+  }
+  return out;
+}
+
 FfdLattice ffdLatticeAround(const std::vector<Vec3>& points, std::array<int, 3> nodes,
                             FfdBasis basis, double margin) {
   if (points.empty()) throw std::invalid_argument("points: none given");

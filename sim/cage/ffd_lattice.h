@@ -56,6 +56,9 @@ struct FfdLattice {
   Eigen::Vector3d restNode(int i, int j, int k) const;
   // All rest node positions (#nodes × 3): the lattice that maps every point to itself.
   FfdNodes restNodes() const;
+  // The outer layer of nodes as a closed surface, outward-oriented: two triangles per boundary
+  // cell face, indices into the nodes (a lattice body's surface for contact).
+  std::vector<std::array<int, 3>> boundaryTriangles() const;
 };
 
 // A lattice whose box is the bounding box of the points grown by margin · (bounding box

@@ -231,9 +231,9 @@ constexpr ParamRange kInteriorSpacing{0.0, limits::coordinateLimit};
 // Harmonic grid cells along the cage's longest side; RBF shape (sim/cage/rbf.h).
 constexpr ParamRange kHarmonicResolution{4, 64};  // ~40 s at 64 (harmonic.h)
 constexpr ParamRange kRbfShape{0.0, 10.0};
+constexpr ParamRange kLatticeMargin{0.0, 1.0};
 
-// "embedding": a method name, or {"method": name, options}. FFD lattices need lattice bodies,
-// which scenes do not have.
+// "embedding": a method name, or {"method": name, options}. FFD is what "lattice" bodies use.
 cage::EmbeddingMethod parseEmbedding(Fields& f) {
   cage::EmbeddingMethod m;
   const json& raw = f.raw("embedding");
@@ -252,8 +252,8 @@ cage::EmbeddingMethod parseEmbedding(Fields& f) {
     f.fail(field, "must be mvc, harmonic or rbf, got '" + name + "'");
   if (m.kind == cage::EmbeddingKind::FfdBernstein || m.kind == cage::EmbeddingKind::FfdBSpline)
     f.fail(field, "'" + name +
-                      "' needs a lattice, and scene bodies are cages: use mvc, "
-                      "harmonic or rbf");
+                      "' is how a lattice body's render mesh follows it: give the body a "
+                      "\"lattice\" instead, or use mvc, harmonic or rbf");
   if (options) {
     if (m.kind == cage::EmbeddingKind::Harmonic)
       m.harmonic.resolution =
@@ -290,6 +290,36 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMe
   const std::string defaultName = "body";
   def.name = f.text("name", &defaultName);
   const std::string none;
+  if (f.has("lattice")) {
+    Fields l(f.raw("lattice"), f.where("lattice"), f.file());
+    LatticeSettings lat;
+    if (l.has("nodes")) {
+      const json& n = l.raw("nodes");
+      if (!n.is_array() || n.size() != 3)
+        l.fail("nodes", "must be three integers [l, m, n], got " + n.dump());
+      for (size_t a = 0; a < 3; ++a) {
+        if (!n[a].is_number_integer() || n[a].get<long long>() < 2 || n[a].get<long long>() > 64)
+          l.fail("nodes", "each must be an integer in [2, 64], got " + n[a].dump());
+        lat.nodes[a] = n[a].get<int>();
+      }
+    }
+    const std::string bernstein = "bernstein";
+    const std::string basis = l.text("basis", &bernstein);
+    if (basis != "bspline" && basis != "bernstein")
+      l.fail("basis", "must be bspline or bernstein, got '" + basis + "'");
+    lat.basis = basis == "bernstein" ? cage::FfdBasis::Bernstein : cage::FfdBasis::BSpline;
+    lat.margin = l.number("margin", lat.margin, kLatticeMargin);
+    l.rejectUnknown();
+    for (const char* other : {"mesh", "cage", "interior", "embedding"})
+      if (f.has(other))
+        f.fail(other,
+               "a lattice body's particles are its lattice's nodes and its render mesh "
+               "follows them with the lattice's weights: no '" +
+                   std::string(other) + "'");
+    if (!f.has("renderMesh"))
+      f.fail("renderMesh", "is required with a lattice (the mesh the lattice deforms)");
+    sb.lattice = lat;
+  }
   if (f.has("cage")) {
     Fields c(f.raw("cage"), f.where("cage"), f.file());
     if (!c.has("auto") || !c.boolean("auto", false))
@@ -303,7 +333,9 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMe
   // With an automatic cage the detailed mesh is named once, as renderMesh or as mesh.
   std::string renderPath = f.text("renderMesh", &none);
   std::string renderField = "renderMesh";  // the field that named the detailed mesh
-  if (!sb.autoCage) {
+  if (sb.lattice) {
+    // the render mesh alone (checked above)
+  } else if (!sb.autoCage) {
     sb.meshPath = f.text("mesh", nullptr);
   } else if (f.has("mesh")) {
     if (!renderPath.empty())
@@ -374,7 +406,26 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMe
   // The method is part of the key: the same pair bound two ways is two embeddings.
   std::array<std::string, 3> renderKey{resolve(baseDir, sb.meshPath), resolve(baseDir, renderPath),
                                        renderPath + "\n" + embeddingText(sb.embedding)};
-  if (sb.autoCage) {
+  if (sb.lattice) {
+    detail = readMeshField(f, renderField, renderPath, baseDir);
+    try {
+      // In file coordinates, as every bind: the weights serve every placement of the mesh.
+      const cage::FfdLattice lattice = cage::ffdLatticeAround(
+          detail.vertices, sb.lattice->nodes, sb.lattice->basis, sb.lattice->margin);
+      const cage::FfdNodes nodes = lattice.restNodes();
+      for (Eigen::Index n = 0; n < nodes.rows(); ++n)
+        mesh.vertices.push_back(nodes.row(n).transpose());
+      mesh.triangles = lattice.boundaryTriangles();
+      sb.latticeFrame = lattice;
+    } catch (const std::exception& e) {
+      f.fail("lattice", e.what());
+    }
+    const auto& n = sb.lattice->nodes;
+    renderKey[0] = "lattice " + std::to_string(n[0]) + " " + std::to_string(n[1]) + " " +
+                   std::to_string(n[2]) + " " +
+                   (sb.lattice->basis == cage::FfdBasis::BSpline ? "bspline " : "bernstein ") +
+                   formatNumber(sb.lattice->margin);
+  } else if (sb.autoCage) {
     detail = readMeshField(f, renderField, renderPath, baseDir);
     cage::CageOptions options;
     options.vertexBudget = sb.autoCage->vertices;
@@ -411,7 +462,7 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMe
   if (!renderPath.empty() && bound.count(renderKey)) {
     sb.render = bound.at(renderKey);
   } else if (!renderPath.empty()) {
-    if (!sb.autoCage) detail = readMeshField(f, "renderMesh", renderPath, baseDir);
+    if (!sb.autoCage && !sb.lattice) detail = readMeshField(f, "renderMesh", renderPath, baseDir);
     cage::BindOptions options;
     options.cacheDir = cacheDirectory();
     options.warning = [](const std::string&) {};  // a cache problem only costs a rebind
@@ -423,7 +474,8 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMe
       // spacing) coordinates are invariant under the placement's similarity transform: bind in
       // file coordinates so the cache is shared by every placement of the same mesh.
       render->embedding = std::make_shared<cage::Embedding>(
-          cage::bindToCage(detail.vertices, mesh, sb.embedding, options));
+          sb.latticeFrame ? cage::bindFfd(detail.vertices, *sb.latticeFrame)
+                          : cage::bindToCage(detail.vertices, mesh, sb.embedding, options));
     } catch (const std::exception& e) {
       f.fail("mesh", std::string("cannot bind the render mesh to this cage: ") + e.what());
     }
@@ -761,7 +813,12 @@ ordered_json bodyJson(const World& w, const SceneBody& b, const std::string& fro
   const BodyParams& p = w.params(b.handle);
   ordered_json j;
   j["name"] = w.name(b.handle);
-  if (b.autoCage) {
+  if (b.lattice) {
+    j["lattice"] = {
+        {"nodes", {b.lattice->nodes[0], b.lattice->nodes[1], b.lattice->nodes[2]}},
+        {"basis", b.lattice->basis == cage::FfdBasis::BSpline ? "bspline" : "bernstein"},
+        {"margin", b.lattice->margin}};
+  } else if (b.autoCage) {
     j["cage"] = {
         {"auto", true}, {"vertices", b.autoCage->vertices}, {"tightness", b.autoCage->tightness}};
   } else {

@@ -16,6 +16,7 @@
 
 #include "sim/cage/auto_cage.h"
 #include "sim/cage/bind.h"
+#include "sim/cage/ffd_lattice.h"
 #include "sim/world/world.h"
 
 namespace sb {
@@ -45,11 +46,27 @@ struct AutoCageSettings {
   double tightness = cage::CageOptions{}.tightness;  // [0, 1], CageOptions::tightness
 };
 
+// "lattice": {"nodes": [l, m, n], "basis": "bernstein" | "bspline", "margin": m}: the body is a
+// free-form deformation lattice around its render mesh (sim/cage/ffd_lattice.h): the lattice's
+// nodes are the particles, its outer layer the contact surface, and the render mesh follows the
+// nodes with the lattice's weights — any mesh, no cage. Bernstein by default: its outer nodes
+// lie on the mesh's (grown) bounding box, so the body touches things there; a B-spline
+// lattice's outer nodes lie a spacing outside the box, and so does its contact surface.
+struct LatticeSettings {
+  std::array<int, 3> nodes{4, 4, 4};  // per axis, [2, 64]: bernstein ≤ 32, bspline ≥ 4
+  cage::FfdBasis basis = cage::FfdBasis::Bernstein;
+  double margin = 0.01;  // the box: the mesh's bounding box grown by margin × its diagonal, [0, 1]
+};
+
 struct SceneBody {
   BodyHandle handle;
   // Particles = this mesh's vertices (as written in the file); empty with an automatic cage.
   std::string meshPath;
   std::optional<AutoCageSettings> autoCage;
+  std::optional<LatticeSettings> lattice;
+  // With a lattice: the lattice in the render mesh file's coordinates (its nodes, placed like
+  // every body's vertices, are the particles).
+  std::optional<cage::FfdLattice> latticeFrame;
   // "interior": {"spacing": s}: lattice particles s metres apart inside the cage follow its
   // vertices (sim/cage/interior_points.h); 0 = none. The particles are the cage's vertices
   // first, then the interior ones; the render mesh follows the first cageVertexCount.

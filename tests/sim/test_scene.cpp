@@ -411,12 +411,91 @@ TEST(FoldWatch, FindsTheBodyTurnedInsideOut) {
   EXPECT_NEAR(folds[0].report.minDeterminant, -1.0, 1e-3);
 }
 
+// A lattice body: its particles are the lattice's nodes (x fastest), its surface the outer
+// layer, its render mesh follows with the lattice's weights (the placed mesh at rest); it falls,
+// rests on the floor with its mesh just above it, and saves as a lattice.
+TEST(Scene, LatticeBodyFromAMeshWithoutCage) {
+  const std::string text = R"({"colliders": [{"type": "plane", "normal": [0, 1, 0], "offset": 0}],
+      "bodies": [{"name": "l", "renderMesh": ")" +
+                           kAssets + R"(/meshes/suzanne.obj",
+        "lattice": {"nodes": [4, 3, 3]}, "translation": [0, 1, 0], "scale": 0.3,
+        "rotationDegrees": [0, 30, 0], "alpha": 0.5}]})";
+  Scene scene = parseScene(text, "lattice.json", "");
+  ASSERT_EQ(scene.bodies.size(), 1u);
+  const SceneBody& b = scene.bodies[0];
+  ASSERT_TRUE(b.lattice && b.latticeFrame && b.render);
+  EXPECT_EQ(scene.world.particleCount(b.handle), 36);
+  EXPECT_EQ(b.cageVertexCount, 36);
+  EXPECT_EQ(b.cageTriangles.size(), 2u * (2 * (3 * 2) + 2 * (3 * 2) + 2 * (2 * 2)));
+  EXPECT_EQ(b.render->embedding->kind(), cage::EmbeddingKind::FfdBernstein);
+  const mesh::TriangleMesh detail = mesh::readMesh(kAssets + "/meshes/suzanne.obj");
+  const Mat3 R = Eigen::AngleAxisd(30 * M_PI / 180, Vec3::UnitY()).toRotationMatrix();
+  PointsRowMajor rendered;
+  scene.renderVertices(0, rendered);
+  double worst = 0.0;
+  for (size_t i = 0; i < detail.vertices.size(); ++i)
+    worst = std::max(worst, (rendered.row(Eigen::Index(i)).cast<double>().transpose() -
+                             (R * (0.3 * detail.vertices[i]) + Vec3(0, 1, 0)))
+                                .norm());
+  EXPECT_LT(worst, 1e-5);
+
+  for (int s = 0; s < 240 * 4; ++s) scene.world.step(1.0 / 240);  // 4 s: fallen and settled
+  scene.renderVertices(0, rendered);
+  const double lowest = rendered.col(1).minCoeff();
+  // The surface is the lattice's box, 1 % of the mesh's diagonal (~1 m here) around the mesh.
+  EXPECT_GT(lowest, -0.002);
+  EXPECT_LT(lowest, 0.03);
+  double fastest = 0.0;
+  for (Eigen::Index i = 0; i < scene.world.velocities(b.handle).rows(); ++i)
+    fastest = std::max(fastest, double(scene.world.velocities(b.handle).row(i).norm()));
+  EXPECT_LT(fastest, 0.01);
+
+  const fs::path dir = fs::temp_directory_path() / "softbody_lattice_scene";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  saveScene(scene, (dir / "saved.json").string());
+  const std::string saved = [&] {
+    std::ifstream in(dir / "saved.json");
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  }();
+  EXPECT_EQ(saved.find("\"mesh\""), std::string::npos) << saved;
+  const Scene back = loadScene((dir / "saved.json").string());
+  ASSERT_TRUE(back.bodies[0].lattice);
+  EXPECT_EQ(back.bodies[0].lattice->nodes, (std::array<int, 3>{4, 3, 3}));
+  EXPECT_EQ(back.world.particleCount(back.bodies[0].handle), 36);
+  fs::remove_all(dir);
+}
+
+TEST(Scene, LatticeErrorsNameTheField) {
+  const std::string suzanne = kAssets + "/meshes/suzanne.obj";
+  auto with = [&](const std::string& fields) {
+    return R"({"bodies": [{"name": "b", )" + fields + "}]}";
+  };
+  const std::string render = R"("renderMesh": ")" + suzanne + R"(", )";
+  expectSceneError(with(R"("lattice": {"nodes": [4, 4, 4]})"),
+                   "bodies[0].renderMesh: is required with a lattice");
+  expectSceneError(with(render + R"("mesh": ")" + suzanne + R"(", "lattice": {})"),
+                   "bodies[0].mesh: a lattice body's particles are its lattice's nodes");
+  expectSceneError(with(render + R"("lattice": {"nodes": [4, 4]})"),
+                   "bodies[0].lattice.nodes: must be three integers");
+  expectSceneError(with(render + R"("lattice": {"nodes": [4, 1, 4]})"),
+                   "bodies[0].lattice.nodes: each must be an integer in [2, 64], got 1");
+  expectSceneError(with(render + R"("lattice": {"basis": "nurbs"})"),
+                   "bodies[0].lattice.basis: must be bspline or bernstein, got 'nurbs'");
+  expectSceneError(with(render + R"("lattice": {"nodes": [3, 4, 4], "basis": "bspline"})"),
+                   "bodies[0].lattice: nodes: 3 on axis x");
+  expectSceneError(with(render + R"("lattice": {"margin": 2})"),
+                   "bodies[0].lattice.margin: must be in [0, 1], got 2");
+  expectSceneError(with(render + R"("lattice": {}, "embedding": "rbf")"),
+                   "bodies[0].embedding: a lattice body's particles are its lattice's nodes");
+}
+
 TEST(Scene, EmbeddingErrorsNameTheField) {
   const std::string render = R"(, "renderMesh": ")" + kAssets + R"(/meshes/suzanne.obj")";
   expectSceneError(body(render + R"(, "embedding": "nope")"),
                    "bodies[0].embedding: must be mvc, harmonic or rbf, got 'nope'");
   expectSceneError(body(render + R"(, "embedding": "ffd-bspline")"),
-                   "bodies[0].embedding: 'ffd-bspline' needs a lattice");
+                   "bodies[0].embedding: 'ffd-bspline' is how a lattice body's render mesh");
   expectSceneError(body(render + R"(, "embedding": 3)"),
                    "bodies[0].embedding: must be a method name or an object");
   expectSceneError(body(render + R"(, "embedding": {"shape": 1})"),
