@@ -186,6 +186,10 @@ TEST(Green, ClosedFormsMatchQuadratureOfTheBoundaryIntegrals) {
   cases.push_back({tetrahedron(), {{0.25, 0.25, 0.25}, {0.1, 0.2, 0.3}, {0.5, 0.2, 0.15}}});
   cases.push_back({makeBox(1, 1, 1), {{0.5, 0.5, 0.5}, {0.2, 0.7, 0.4}, {0.8, 0.15, 0.75}}});
   cases.push_back({makeBox(2, 1, 3, Vec3(2.0, 1.0, 1.5)), {{0.3, 0.4, 0.5}, {1.7, 0.8, 1.2}}});
+  // Non-convex L: points in, or a hair off, the planes of the inner-corner faces, away from
+  // those faces (the near-plane form of the solid angle, and Ω = 0 in the plane).
+  cases.push_back({mesh::testing::makeLShape(),
+                   {{0.5, 1.0, 0.5}, {0.5, 1.0 + 1e-3, 0.4}, {1.0 - 1e-4, 0.5, 0.6}}});
   double worstPhi = 0.0, worstPsi = 0.0;
   for (const Case& c : cases) {
     for (const Vec3& eta : c.points) {
