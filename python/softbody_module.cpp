@@ -615,7 +615,7 @@ PYBIND11_MODULE(softbody, m) {
         cage::EmbeddingMethod how;
         if (!cage::parseEmbeddingKind(method, &how.kind) ||
             how.kind == cage::EmbeddingKind::FfdBernstein ||
-            how.kind == cage::EmbeddingKind::FfdBSpline)
+            how.kind == cage::EmbeddingKind::FfdBSpline || how.kind == cage::EmbeddingKind::Green)
           throw py::value_error("method must be 'mvc', 'harmonic' or 'rbf', got '" + method + "'");
         if (resolution < 4 || resolution > 64)  // the bind's time grows like resolution⁶
           throw py::value_error("resolution must be in [4, 64], got " + std::to_string(resolution));

@@ -45,6 +45,11 @@ Embedding bindToCage(const std::vector<Vec3>& points, const mesh::TriangleMesh& 
     case EmbeddingKind::FfdBSpline:
       throw std::invalid_argument(std::string("bind: '") + embeddingKindName(method.kind) +
                                   "' is driven by a lattice, not a cage (bindFfd)");
+    case EmbeddingKind::Green:
+      // W has a column per cage vertex and per face: W · cage vertices is not the deformed mesh.
+      throw std::invalid_argument(
+          "bind: 'green' deforms with extended controls (cage vertices and face normals): use "
+          "bindGreen and greenControls (green.h)");
   }
   mesh::validateClosedSurface(cage, "cage");
   std::array<std::uint64_t, 2> key{};

@@ -542,6 +542,8 @@ const char* embeddingKindName(EmbeddingKind kind) {
       return "ffd-bernstein";
     case EmbeddingKind::FfdBSpline:
       return "ffd-bspline";
+    case EmbeddingKind::Green:
+      return "green";
   }
   return "?";
 }

@@ -47,9 +47,11 @@ enum class EmbeddingKind : std::uint8_t {
   Rbf = 2,           // rbf.h: any handles (a cage's vertices, or points)
   FfdBernstein = 3,  // ffd_lattice.h: lattice nodes
   FfdBSpline = 4,    // ffd_lattice.h: lattice nodes
+  Green = 5,         // green.h: extended controls, cage vertices then faces (greenControls)
 };
-inline constexpr int kEmbeddingKindCount = 5;
-// "mvc", "harmonic", "rbf", "ffd-bernstein", "ffd-bspline": the names scenes and the CLI use.
+inline constexpr int kEmbeddingKindCount = 6;
+// "mvc", "harmonic", "rbf", "ffd-bernstein", "ffd-bspline", "green": the names scenes and the CLI
+// use.
 const char* embeddingKindName(EmbeddingKind kind);
 // The kind of a name above; false for anything else.
 bool parseEmbeddingKind(const std::string& name, EmbeddingKind* kind);

@@ -254,6 +254,10 @@ cage::EmbeddingMethod parseEmbedding(Fields& f) {
     f.fail(field, "'" + name +
                       "' is how a lattice body's render mesh follows it: give the body a "
                       "\"lattice\" instead, or use mvc, harmonic or rbf");
+  if (m.kind == cage::EmbeddingKind::Green)
+    f.fail(field,
+           "'green' needs the cage's face normals as extra controls, which scene bodies "
+           "do not feed yet: use mvc, harmonic or rbf (or sim/cage/green.h directly)");
   if (options) {
     if (m.kind == cage::EmbeddingKind::Harmonic)
       m.harmonic.resolution =

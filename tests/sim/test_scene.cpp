@@ -496,6 +496,8 @@ TEST(Scene, EmbeddingErrorsNameTheField) {
                    "bodies[0].embedding: must be mvc, harmonic or rbf, got 'nope'");
   expectSceneError(body(render + R"(, "embedding": "ffd-bspline")"),
                    "bodies[0].embedding: 'ffd-bspline' is how a lattice body's render mesh");
+  expectSceneError(body(render + R"(, "embedding": "green")"),
+                   "bodies[0].embedding: 'green' needs the cage's face normals");
   expectSceneError(body(render + R"(, "embedding": 3)"),
                    "bodies[0].embedding: must be a method name or an object");
   expectSceneError(body(render + R"(, "embedding": {"shape": 1})"),
