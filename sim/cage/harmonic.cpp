@@ -223,64 +223,103 @@ class Multigrid {
   }
   int levels() const { return int(levels_.size()); }
 
-  // z = M⁻¹ r (one V-cycle from z = 0).
-  void apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const { cycle(0, r, z); }
+  // One row per unknown, one column per right-hand side: a sweep over the matrix serves all the
+  // columns of a block at once.
+  // The width is fixed at compile time so that the sweeps' inner loops vectorise; a block with
+  // fewer right-hand sides is padded with zero columns (which CG leaves alone).
+  static constexpr int kColumns = 8;
+  using Block = Eigen::Matrix<double, Eigen::Dynamic, kColumns, Eigen::RowMajor>;
+
+  // Z = M⁻¹ R (one V-cycle from Z = 0), column by column.
+  void apply(const Block& R, Block& Z) const { cycle(0, R, Z); }
 
  private:
   struct Level {
     Sparse A, P, Pt;  // P: from the next coarser level to this one
     Eigen::VectorXd invDiag;
   };
-  void cycle(std::size_t l, const Eigen::VectorXd& r, Eigen::VectorXd& z) const {
+  void cycle(std::size_t l, const Block& R, Block& Z) const {
     if (l + 1 == levels_.size()) {
-      z = coarsest_.solve(r);
+      Z = coarsest_.solve(Eigen::MatrixXd(R));
       return;
     }
     const Level& L = levels_[l];
     const std::int64_t n = L.A.rows();
+    constexpr std::int64_t K = kColumns;
     const double* val = L.A.valuePtr();
     const int* inner = L.A.innerIndexPtr();
     const int* outer = L.A.outerIndexPtr();
-    z.setZero(n);
+    Z.setZero(n, K);
+    double* z = Z.data();
+    const double* r = R.data();
+    double s[K];
     auto relax = [&](std::int64_t i) {
-      double s = r[i];
-      for (int k = outer[i]; k < outer[i + 1]; ++k) s -= val[k] * z[inner[k]];
-      z[i] += s * L.invDiag[i];  // s includes the diagonal term A_ii·z_i
+      for (std::int64_t c = 0; c < K; ++c) s[c] = r[i * K + c];
+      for (int k = outer[i]; k < outer[i + 1]; ++k) {
+        const double a = val[k];
+        const double* zq = z + std::int64_t(inner[k]) * K;
+        for (std::int64_t c = 0; c < K; ++c) s[c] -= a * zq[c];
+      }
+      // s includes the diagonal term A_ii·z_i.
+      for (std::int64_t c = 0; c < K; ++c) z[i * K + c] += s[c] * L.invDiag[i];
     };
     for (std::int64_t i = 0; i < n; ++i) relax(i);
-    const Eigen::VectorXd rc = L.Pt * (r - L.A * z);
-    Eigen::VectorXd ec;
+    Block residual = R;
+    residual.noalias() -= L.A * Z;
+    const Block rc = L.Pt * residual;
+    Block ec;
     cycle(l + 1, rc, ec);
-    z.noalias() += L.P * ec;
+    Z.noalias() += L.P * ec;
     for (std::int64_t i = n - 1; i >= 0; --i) relax(i);
   }
   std::vector<Level> levels_;
   Eigen::SimplicialLDLT<Sparse, Eigen::Lower, Eigen::AMDOrdering<int>> coarsest_;
 };
 
-// Preconditioned conjugate gradients for A x = b from x = 0, until |r| ≤ tol·|b|. Returns the
-// iterations taken.
-int multigridCg(const Eigen::SparseMatrix<double>& A, const Multigrid& M, const Eigen::VectorXd& b,
-                double tol, Eigen::VectorXd& x) {
+// Preconditioned conjugate gradients for A X = B from X = 0, each column until
+// |r| ≤ tol·|b| (a converged column is left alone while the others go on, so its result does
+// not depend on them). Writes each column's iteration count to iterations[c].
+void multigridCg(const Eigen::SparseMatrix<double>& A, const Multigrid& M,
+                 const Multigrid::Block& B, double tol, Multigrid::Block& X, int* iterations) {
   const std::int64_t n = A.rows();
-  x.setZero(n);
-  const double bnorm = b.norm();
-  if (bnorm == 0.0) return 0;
-  Eigen::VectorXd r = b, z(n), p(n), Ap(n);
-  M.apply(r, z);
-  p = z;
-  double rz = r.dot(z);
+  constexpr std::int64_t K = Multigrid::kColumns;
+  X.setZero(n, K);
+  std::vector<double> bnorm(static_cast<std::size_t>(K)), rz(static_cast<std::size_t>(K));
+  std::vector<char> active(static_cast<std::size_t>(K));
+  int activeCount = 0;
+  for (std::int64_t c = 0; c < K; ++c) {
+    bnorm[size_t(c)] = B.col(c).norm();
+    active[size_t(c)] = bnorm[size_t(c)] > 0.0;
+    activeCount += active[size_t(c)];
+    iterations[c] = 0;
+  }
+  if (activeCount == 0) return;
+  Multigrid::Block R = B, Z, P, AP;
+  M.apply(R, Z);
+  P = Z;
+  for (std::int64_t c = 0; c < K; ++c) rz[size_t(c)] = R.col(c).dot(Z.col(c));
   constexpr int kMaxIterations = 1000;
   for (int it = 1; it <= kMaxIterations; ++it) {
-    Ap.noalias() = A * p;
-    const double alpha = rz / p.dot(Ap);
-    x += alpha * p;
-    r -= alpha * Ap;
-    if (r.norm() <= tol * bnorm) return it;
-    M.apply(r, z);
-    const double rzNew = r.dot(z);
-    p = z + (rzNew / rz) * p;
-    rz = rzNew;
+    AP.noalias() = A * P;
+    for (std::int64_t c = 0; c < K; ++c) {
+      if (!active[size_t(c)]) continue;
+      const double alpha = rz[size_t(c)] / P.col(c).dot(AP.col(c));
+      X.col(c) += alpha * P.col(c);
+      R.col(c) -= alpha * AP.col(c);
+      if (R.col(c).norm() <= tol * bnorm[size_t(c)]) {
+        active[size_t(c)] = 0;
+        --activeCount;
+        iterations[c] = it;
+      }
+    }
+    if (activeCount == 0) return;
+    M.apply(R, Z);
+    for (std::int64_t c = 0; c < K; ++c) {
+      if (!active[size_t(c)]) continue;
+      const double rzNew = R.col(c).dot(Z.col(c));
+      P.col(c) = Z.col(c) + (rzNew / rz[size_t(c)]) * P.col(c);
+      rz[size_t(c)] = rzNew;
+    }
   }
   throw std::runtime_error("bindHarmonic: conjugate gradients did not converge in " +
                            std::to_string(kMaxIterations) + " iterations");
@@ -576,15 +615,22 @@ Embedding bindHarmonic(const std::vector<Vec3>& points, const mesh::TriangleMesh
   for (int j = 0; j < m; ++j) colStart[size_t(j) + 1] += colStart[size_t(j)];
   std::vector<int> cgIterations(size_t(m), 0);
   if (nI > 0 && cg) {
-    // Each column is solved alone, by the same operations whatever the split.
-    parallelRanges(m, 2, threads, [&](int j0, int j1) {
-      Eigen::VectorXd b, x;
-      for (int j = j0; j < j1; ++j) {
-        b.setZero(nI);
-        for (std::size_t e = colStart[size_t(j)]; e < colStart[size_t(j) + 1]; ++e)
-          b[rhs[e].row] += rhs[e].value;
-        cgIterations[size_t(j)] = multigridCg(A, *multigrid, b, options.cgTolerance, x);
-        X.col(j) = x;
+    // Fixed blocks of kColumns columns, split across threads whole: a column's operations
+    // depend only on its own data, so W is the same whatever the split.
+    constexpr int kColumns = Multigrid::kColumns;
+    const int blocks = (m + kColumns - 1) / kColumns;
+    parallelRanges(blocks, 2, threads, [&](int k0, int k1) {
+      Multigrid::Block B, Xb;
+      int iterations[kColumns];
+      for (int k = k0; k < k1; ++k) {
+        const int j0 = k * kColumns, cols = std::min(kColumns, m - j0);
+        B.setZero(nI, kColumns);
+        for (int j = j0; j < j0 + cols; ++j)
+          for (std::size_t e = colStart[size_t(j)]; e < colStart[size_t(j) + 1]; ++e)
+            B(rhs[e].row, j - j0) += rhs[e].value;
+        multigridCg(A, *multigrid, B, options.cgTolerance, Xb, iterations);
+        X.middleCols(j0, cols) = Xb.leftCols(cols);
+        for (int c = 0; c < cols; ++c) cgIterations[size_t(j0 + c)] = iterations[c];
       }
     });
   } else if (nI > 0) {
