@@ -29,7 +29,7 @@ enum class HarmonicOrdering {
 // How the Laplace system is solved (README.md, "Harmonic coordinates": cost table).
 enum class HarmonicSolver {
   // Direct up to resolution 32 (faster there: 0.3 s against 0.6 s for the bunny cage),
-  // MultigridCg above (3.5 s against 48 s at resolution 64).
+  // MultigridCg above (4.6 s against 36–48 s at resolution 64).
   Auto,
   // Eigen's SimplicialLDLT of the whole system, one solve per cage vertex. Cost ~ resolution⁶.
   Direct,
@@ -56,7 +56,7 @@ struct HarmonicOptions {
   // Grid cells along the longest axis of the cage's bounding box (cubic cells), ≥ 4. The bind's
   // error (linear precision, distance to the exact coordinates) is about one cell (CutCell: far
   // less inside, README.md). 32 by default: a 164-vertex cage binds in ~0.5 s there; above 32
-  // HarmonicSolver::Auto switches to multigrid CG, ~3.5 s at 64 (the direct solve: ~48 s).
+  // HarmonicSolver::Auto switches to multigrid CG, ~5 s at 64 (the direct solve: ~40 s).
   int resolution = 32;
   // Threads for the solve and the lookup, at most threadCount() (0 = threadCount();
   // sim/base/parallel.h). The weights do not depend on it.

@@ -5,7 +5,9 @@
 //                                              unknowns, factor non-zeros, linear-precision error
 //                                              (fraction of the cage diagonal); amd:1 = Eigen's
 //                                              AMD ordering (default), amd:0 = nested dissection;
-//                                              cut:0 = HarmonicBoundary::ClosestPoint
+//                                              cut:0 = HarmonicBoundary::ClosestPoint; cg:0 =
+//                                              HarmonicSolver::Direct, cg:1 = MultigridCg
+//                                              (counter cg_its: most CG iterations)
 //   bench_harmonic --benchmark_filter=Deform   ms per frame for 100k points (dense W)
 #include <benchmark/benchmark.h>
 
