@@ -23,6 +23,8 @@ std::array<std::uint64_t, 2> methodCacheKey(const std::vector<Vec3>& points,
       h.value(static_cast<std::int64_t>(method.harmonic.resolution));
       h.value(static_cast<std::uint64_t>(method.harmonic.boundary));
       h.value(static_cast<std::uint64_t>(method.harmonic.ordering));  // round-off differs
+      h.value(static_cast<std::uint64_t>(method.harmonic.solver));    // so does the solver's
+      h.value(method.harmonic.cgTolerance);
     } else if (method.kind == EmbeddingKind::Rbf) {
       h.value(method.rbf.shape);
     }

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -141,6 +142,189 @@ void nestedDissection(std::vector<std::int64_t>& nodes, std::int64_t nx, std::in
   order.insert(order.end(), separator.begin(), separator.end());
 }
 
+// Multigrid preconditioner for conjugate gradients on the grid Laplacian A (full symmetric
+// matrix, column-major: column i is row i). The unknowns of the next coarser level are this
+// level's unknowns with even grid indices; an unknown takes the trilinear interpolation of the
+// coarse nodes around it, those that are not unknowns counting as 0 like the boundary (P; every
+// column of P has a 1 in its own node's row, so P has full rank and Pᵀ A P is positive
+// definite). The coarse matrix is that Galerkin product, so the cut-cell arms (large diagonals
+// near the cage) are inherited without a coarse-grid geometry. Levels are added until at most
+// kDirectUnknowns remain, which are solved exactly (SimplicialLDLT). A V-cycle: forward
+// Gauss-Seidel, coarse correction, backward Gauss-Seidel; symmetric, so CG may use it.
+class Multigrid {
+ public:
+  using Sparse = Eigen::SparseMatrix<double>;
+  static constexpr std::int64_t kDirectUnknowns = 2000;
+
+  Multigrid(const Sparse& A, std::vector<std::int64_t> nodes, std::vector<int> unknown,
+            std::int64_t nx, std::int64_t ny, std::int64_t nz) {
+    levels_.emplace_back();
+    levels_.back().A = A;
+    while (levels_.back().A.rows() > kDirectUnknowns && nx > 2 && ny > 2 && nz > 2) {
+      Level& L = levels_.back();
+      const std::int64_t n = L.A.rows();
+      L.invDiag.resize(n);
+      for (std::int64_t i = 0; i < n; ++i) L.invDiag[i] = 1.0 / L.A.coeff(i, i);
+      const std::int64_t cx = (nx + 1) / 2, cy = (ny + 1) / 2, cz = (nz + 1) / 2;
+      std::vector<int> coarseUnknown(size_t(cx * cy * cz), -1);
+      std::vector<std::int64_t> coarseNodes;
+      for (std::int64_t r = 0; r < n; ++r) {
+        const std::int64_t id = nodes[size_t(r)];
+        const std::int64_t i = id % nx, j = (id / nx) % ny, k = id / (nx * ny);
+        if (i % 2 == 0 && j % 2 == 0 && k % 2 == 0)
+          coarseNodes.push_back(i / 2 + cx * (j / 2 + cy * (k / 2)));
+      }
+      // In grid order, whatever this level's numbering.
+      std::sort(coarseNodes.begin(), coarseNodes.end());
+      for (std::size_t c = 0; c < coarseNodes.size(); ++c)
+        coarseUnknown[size_t(coarseNodes[c])] = int(c);
+      std::vector<Eigen::Triplet<double>> pt;
+      pt.reserve(size_t(n) * 8);
+      for (std::int64_t r = 0; r < n; ++r) {
+        const std::int64_t id = nodes[size_t(r)];
+        const std::int64_t idx[3] = {id % nx, (id / nx) % ny, id / (nx * ny)};
+        for (int corner = 0; corner < 8; ++corner) {
+          std::int64_t c[3];
+          double w = 1.0;
+          bool used = true;
+          for (int a = 0; a < 3; ++a) {
+            const int bit = (corner >> a) & 1;
+            if (idx[a] % 2 == 0) {
+              used = used && bit == 0;  // on a coarse line: that coordinate only
+              c[a] = idx[a] / 2;
+            } else {
+              c[a] = idx[a] / 2 + bit;
+              w *= 0.5;
+            }
+          }
+          if (!used || c[0] >= cx || c[1] >= cy || c[2] >= cz) continue;
+          const int col = coarseUnknown[size_t(c[0] + cx * (c[1] + cy * c[2]))];
+          if (col >= 0) pt.emplace_back(int(r), col, w);
+        }
+      }
+      L.P.resize(n, std::int64_t(coarseNodes.size()));
+      L.P.setFromTriplets(pt.begin(), pt.end());
+      L.Pt = L.P.transpose();
+      Sparse Ac = Sparse(L.Pt * L.A * L.P);
+      levels_.emplace_back();
+      levels_.back().A = std::move(Ac);
+      nodes.swap(coarseNodes);
+      unknown.swap(coarseUnknown);
+      nx = cx;
+      ny = cy;
+      nz = cz;
+    }
+    coarsest_.compute(levels_.back().A);
+    if (coarsest_.info() != Eigen::Success)
+      throw std::runtime_error("bindHarmonic: the factorisation of the coarse Laplacian failed");
+  }
+  std::int64_t coarseFactorNonZeros() const {
+    return coarsest_.matrixL().nestedExpression().nonZeros();
+  }
+  int levels() const { return int(levels_.size()); }
+
+  // One row per unknown, one column per right-hand side: a sweep over the matrix serves all the
+  // columns of a block at once.
+  // The width is fixed at compile time so that the sweeps' inner loops vectorise; a block with
+  // fewer right-hand sides is padded with zero columns (which CG leaves alone).
+  static constexpr int kColumns = 8;
+  using Block = Eigen::Matrix<double, Eigen::Dynamic, kColumns, Eigen::RowMajor>;
+
+  // Z = M⁻¹ R (one V-cycle from Z = 0), column by column.
+  void apply(const Block& R, Block& Z) const { cycle(0, R, Z); }
+
+ private:
+  struct Level {
+    Sparse A, P, Pt;  // P: from the next coarser level to this one
+    Eigen::VectorXd invDiag;
+  };
+  void cycle(std::size_t l, const Block& R, Block& Z) const {
+    if (l + 1 == levels_.size()) {
+      Z = coarsest_.solve(Eigen::MatrixXd(R));
+      return;
+    }
+    const Level& L = levels_[l];
+    const std::int64_t n = L.A.rows();
+    constexpr std::int64_t K = kColumns;
+    const double* val = L.A.valuePtr();
+    const int* inner = L.A.innerIndexPtr();
+    const int* outer = L.A.outerIndexPtr();
+    Z.setZero(n, K);
+    double* z = Z.data();
+    const double* r = R.data();
+    double s[K];
+    auto relax = [&](std::int64_t i) {
+      for (std::int64_t c = 0; c < K; ++c) s[c] = r[i * K + c];
+      for (int k = outer[i]; k < outer[i + 1]; ++k) {
+        const double a = val[k];
+        const double* zq = z + std::int64_t(inner[k]) * K;
+        for (std::int64_t c = 0; c < K; ++c) s[c] -= a * zq[c];
+      }
+      // s includes the diagonal term A_ii·z_i.
+      for (std::int64_t c = 0; c < K; ++c) z[i * K + c] += s[c] * L.invDiag[i];
+    };
+    for (std::int64_t i = 0; i < n; ++i) relax(i);
+    Block residual = R;
+    residual.noalias() -= L.A * Z;
+    const Block rc = L.Pt * residual;
+    Block ec;
+    cycle(l + 1, rc, ec);
+    Z.noalias() += L.P * ec;
+    for (std::int64_t i = n - 1; i >= 0; --i) relax(i);
+  }
+  std::vector<Level> levels_;
+  Eigen::SimplicialLDLT<Sparse, Eigen::Lower, Eigen::AMDOrdering<int>> coarsest_;
+};
+
+// Preconditioned conjugate gradients for A X = B from X = 0, each column until
+// |r| ≤ tol·|b| (a converged column is left alone while the others go on, so its result does
+// not depend on them). Writes each column's iteration count to iterations[c].
+void multigridCg(const Eigen::SparseMatrix<double>& A, const Multigrid& M,
+                 const Multigrid::Block& B, double tol, Multigrid::Block& X, int* iterations) {
+  const std::int64_t n = A.rows();
+  constexpr std::int64_t K = Multigrid::kColumns;
+  X.setZero(n, K);
+  std::vector<double> bnorm(static_cast<std::size_t>(K)), rz(static_cast<std::size_t>(K));
+  std::vector<char> active(static_cast<std::size_t>(K));
+  int activeCount = 0;
+  for (std::int64_t c = 0; c < K; ++c) {
+    bnorm[size_t(c)] = B.col(c).norm();
+    active[size_t(c)] = bnorm[size_t(c)] > 0.0;
+    activeCount += active[size_t(c)];
+    iterations[c] = 0;
+  }
+  if (activeCount == 0) return;
+  Multigrid::Block R = B, Z, P, AP;
+  M.apply(R, Z);
+  P = Z;
+  for (std::int64_t c = 0; c < K; ++c) rz[size_t(c)] = R.col(c).dot(Z.col(c));
+  constexpr int kMaxIterations = 1000;
+  for (int it = 1; it <= kMaxIterations; ++it) {
+    AP.noalias() = A * P;
+    for (std::int64_t c = 0; c < K; ++c) {
+      if (!active[size_t(c)]) continue;
+      const double alpha = rz[size_t(c)] / P.col(c).dot(AP.col(c));
+      X.col(c) += alpha * P.col(c);
+      R.col(c) -= alpha * AP.col(c);
+      if (R.col(c).norm() <= tol * bnorm[size_t(c)]) {
+        active[size_t(c)] = 0;
+        --activeCount;
+        iterations[c] = it;
+      }
+    }
+    if (activeCount == 0) return;
+    M.apply(R, Z);
+    for (std::int64_t c = 0; c < K; ++c) {
+      if (!active[size_t(c)]) continue;
+      const double rzNew = R.col(c).dot(Z.col(c));
+      P.col(c) = Z.col(c) + (rzNew / rz[size_t(c)]) * P.col(c);
+      rz[size_t(c)] = rzNew;
+    }
+  }
+  throw std::runtime_error("bindHarmonic: conjugate gradients did not converge in " +
+                           std::to_string(kMaxIterations) + " iterations");
+}
+
 }  // namespace
 
 Embedding bindHarmonic(const std::vector<Vec3>& points, const mesh::TriangleMesh& cage,
@@ -151,6 +335,9 @@ Embedding bindHarmonic(const std::vector<Vec3>& points, const mesh::TriangleMesh
     if (!points[i].allFinite())
       throw std::invalid_argument("bindHarmonic: point " + std::to_string(i) + " is not finite");
   }
+  if (!(options.cgTolerance > 0.0 && options.cgTolerance < 1.0))
+    throw std::invalid_argument("bindHarmonic: cgTolerance must be in (0, 1), got " +
+                                std::to_string(options.cgTolerance));
   if (options.resolution < 4)
     throw std::invalid_argument("bindHarmonic: resolution must be at least 4 cells, got " +
                                 std::to_string(options.resolution));
@@ -297,6 +484,7 @@ Embedding bindHarmonic(const std::vector<Vec3>& points, const mesh::TriangleMesh
     else
       order.swap(unknownNodes);
     for (std::int64_t r = 0; r < nI; ++r) unknown[size_t(order[size_t(r)])] = static_cast<int>(r);
+    unknownNodes.swap(order);  // unknownNodes[r] = grid node of unknown r
   }
   // The solution (8 bytes per unknown and cage vertex), the right-hand-side blocks (16 columns
   // per thread) and the factor: both orderings fill a 3-D grid with O(n^{4/3}) entries, measured
@@ -388,6 +576,15 @@ Embedding bindHarmonic(const std::vector<Vec3>& points, const mesh::TriangleMesh
   }
   std::stable_sort(rhs.begin(), rhs.end(),
                    [](const RhsEntry& x, const RhsEntry& y) { return x.column < y.column; });
+  const bool cg = options.solver == HarmonicSolver::MultigridCg ||
+                  (options.solver == HarmonicSolver::Auto && options.resolution > 32);
+  if (cg) {
+    // The Gauss-Seidel sweeps and products want the whole matrix: mirror the lower triangle.
+    const std::size_t lower = triplets.size();
+    for (std::size_t k = 0; k < lower; ++k)
+      if (triplets[k].row() != triplets[k].col())
+        triplets.emplace_back(triplets[k].col(), triplets[k].row(), triplets[k].value());
+  }
   Eigen::SparseMatrix<double> A(nI, nI);
   A.setFromTriplets(triplets.begin(), triplets.end());
   std::vector<Eigen::Triplet<double>>().swap(triplets);
@@ -395,8 +592,11 @@ Embedding bindHarmonic(const std::vector<Vec3>& points, const mesh::TriangleMesh
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::NaturalOrdering<int>>
       ldltNatural;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::AMDOrdering<int>> ldltAmd;
+  std::unique_ptr<Multigrid> multigrid;
   const bool amd = options.ordering == HarmonicOrdering::Amd;
-  if (nI > 0) {
+  if (nI > 0 && cg) {
+    multigrid = std::make_unique<Multigrid>(A, unknownNodes, unknown, nx, ny, nz);
+  } else if (nI > 0) {
     if (amd)
       ldltAmd.compute(A);
     else
@@ -413,7 +613,27 @@ Embedding bindHarmonic(const std::vector<Vec3>& points, const mesh::TriangleMesh
   std::vector<std::size_t> colStart(size_t(m) + 1, 0);
   for (const RhsEntry& e : rhs) ++colStart[size_t(e.column) + 1];
   for (int j = 0; j < m; ++j) colStart[size_t(j) + 1] += colStart[size_t(j)];
-  if (nI > 0) {
+  std::vector<int> cgIterations(size_t(m), 0);
+  if (nI > 0 && cg) {
+    // Fixed blocks of kColumns columns, split across threads whole: a column's operations
+    // depend only on its own data, so W is the same whatever the split.
+    constexpr int kColumns = Multigrid::kColumns;
+    const int blocks = (m + kColumns - 1) / kColumns;
+    parallelRanges(blocks, 2, threads, [&](int k0, int k1) {
+      Multigrid::Block B, Xb;
+      int iterations[kColumns];
+      for (int k = k0; k < k1; ++k) {
+        const int j0 = k * kColumns, cols = std::min(kColumns, m - j0);
+        B.setZero(nI, kColumns);
+        for (int j = j0; j < j0 + cols; ++j)
+          for (std::size_t e = colStart[size_t(j)]; e < colStart[size_t(j) + 1]; ++e)
+            B(rhs[e].row, j - j0) += rhs[e].value;
+        multigridCg(A, *multigrid, B, options.cgTolerance, Xb, iterations);
+        X.middleCols(j0, cols) = Xb.leftCols(cols);
+        for (int c = 0; c < cols; ++c) cgIterations[size_t(j0 + c)] = iterations[c];
+      }
+    });
+  } else if (nI > 0) {
     parallelRanges(m, 2, threads, [&](int j0, int j1) {
       constexpr int kBlock = 16;
       Eigen::MatrixXd B;
@@ -481,6 +701,14 @@ Embedding bindHarmonic(const std::vector<Vec3>& points, const mesh::TriangleMesh
       }
     }
   });
+  if (cg) {
+    // The exact weights sum to 1; CG stops short of that by about its tolerance, so the rows are
+    // rescaled to keep the partition of unity to round-off (w ≥ 0 is unchanged by it).
+    for (int p = 0; p < n; ++p) {
+      const double sum = W.row(p).sum();
+      if (sum > 0.0) W.row(p) /= sum;
+    }
+  }
   const double lookupSeconds = since(tl);
 
   HarmonicReport rep;
@@ -490,8 +718,10 @@ Embedding bindHarmonic(const std::vector<Vec3>& points, const mesh::TriangleMesh
   rep.boundaryNodes = nB;
   rep.cutArms = cutArms;
   rep.factorNonZeros = nI == 0 ? 0
+                       : cg    ? multigrid->coarseFactorNonZeros()
                        : amd   ? ldltAmd.matrixL().nestedExpression().nonZeros()
                                : ldltNatural.matrixL().nestedExpression().nonZeros();
+  for (const int its : cgIterations) rep.maxCgIterations = std::max(rep.maxCgIterations, its);
   rep.classifySeconds = classifySeconds;
   rep.factorSeconds = factorSeconds;
   rep.solveSeconds = solveSeconds;

@@ -26,6 +26,21 @@ enum class HarmonicOrdering {
   NestedDissection,  // geometric nested dissection of the grid (mid-planes of the box)
 };
 
+// How the Laplace system is solved (README.md, "Harmonic coordinates": cost table).
+enum class HarmonicSolver {
+  // Direct up to resolution 32 (faster there: 0.3 s against 0.6 s for the bunny cage),
+  // MultigridCg above (4.6 s against 36–48 s at resolution 64).
+  Auto,
+  // Eigen's SimplicialLDLT of the whole system, one solve per cage vertex. Cost ~ resolution⁶.
+  Direct,
+  // Conjugate gradients per cage vertex, preconditioned by a multigrid V-cycle: symmetric
+  // Gauss-Seidel on each grid, trilinear interpolation between grids of doubling spacing,
+  // Galerkin coarse systems, an exact solve (SimplicialLDLT) on the coarsest (≤ 2000 unknowns).
+  // Stops at a relative residual of cgTolerance; its weights differ from Direct's by about that
+  // much. Cost ~ resolution³.
+  MultigridCg,
+};
+
 // How the cage's boundary values enter the grid (README.md, "Harmonic coordinates").
 enum class HarmonicBoundary {
   // Every inside node is an unknown; a stencil arm that leaves the cage ends at the crossing
@@ -40,8 +55,8 @@ enum class HarmonicBoundary {
 struct HarmonicOptions {
   // Grid cells along the longest axis of the cage's bounding box (cubic cells), ≥ 4. The bind's
   // error (linear precision, distance to the exact coordinates) is about one cell (CutCell: far
-  // less inside, README.md). 32 by default: a 164-vertex cage binds in ~0.5 s there, and the
-  // cost grows like resolution⁶ (~40 s at 64; Eigen's sparse Cholesky is one column at a time).
+  // less inside, README.md). 32 by default: a 164-vertex cage binds in ~0.5 s there; above 32
+  // HarmonicSolver::Auto switches to multigrid CG, ~5 s at 64 (the direct solve: ~40 s).
   int resolution = 32;
   // Threads for the solve and the lookup, at most threadCount() (0 = threadCount();
   // sim/base/parallel.h). The weights do not depend on it.
@@ -53,6 +68,10 @@ struct HarmonicOptions {
   std::uint64_t maxBytes = std::uint64_t(4) << 30;
   HarmonicBoundary boundary = HarmonicBoundary::CutCell;
   HarmonicOrdering ordering = HarmonicOrdering::Amd;
+  HarmonicSolver solver = HarmonicSolver::Auto;
+  // MultigridCg: stop at |r| ≤ cgTolerance·|b| per cage vertex. 1e-12 kept the bunny cage's
+  // weights within 4e-11 of Direct's at resolutions 24 and 32, 1.2e-10 at 64 (README.md).
+  double cgTolerance = 1e-12;
   bool keepDoublePrecision = true;  // keep the double weights in the Embedding (deformDouble)
 };
 
@@ -64,11 +83,12 @@ struct HarmonicReport {
   std::int64_t interiorNodes = 0;
   std::int64_t boundaryNodes = 0;  // other nodes given boundary values (within √3·h of the cage)
   std::int64_t cutArms = 0;        // CutCell: stencil arms ending at a cage crossing
-  std::int64_t factorNonZeros = 0;  // non-zeros of the LDLᵀ factor L
+  std::int64_t factorNonZeros = 0;  // non-zeros of the LDLᵀ factor L (MultigridCg: coarse grid's)
+  int maxCgIterations = 0;          // MultigridCg: most iterations any cage vertex took
   double classifySeconds = 0.0;     // distances and inside/outside of the nodes
-  double factorSeconds = 0.0;       // assembly + sparse LDLᵀ factorisation (AMD ordering)
-  double solveSeconds = 0.0;        // the solves for all cage vertices
-  double lookupSeconds = 0.0;       // trilinear lookup of the points
+  double factorSeconds = 0.0;  // assembly + sparse LDLᵀ factorisation (MultigridCg: the levels)
+  double solveSeconds = 0.0;   // the solves for all cage vertices
+  double lookupSeconds = 0.0;  // trilinear lookup of the points
   double totalSeconds = 0.0;
   // Points whose grid cell lacks values at some corner (outside the cage, more than a cell
   // away, or beyond the grid): given the hat functions of their closest cage point.

@@ -5,7 +5,9 @@
 //                                              unknowns, factor non-zeros, linear-precision error
 //                                              (fraction of the cage diagonal); amd:1 = Eigen's
 //                                              AMD ordering (default), amd:0 = nested dissection;
-//                                              cut:0 = HarmonicBoundary::ClosestPoint
+//                                              cut:0 = HarmonicBoundary::ClosestPoint; cg:0 =
+//                                              HarmonicSolver::Direct, cg:1 = MultigridCg
+//                                              (counter cg_its: most CG iterations)
 //   bench_harmonic --benchmark_filter=Deform   ms per frame for 100k points (dense W)
 #include <benchmark/benchmark.h>
 
@@ -35,6 +37,7 @@ void BM_BindHarmonicBunny(benchmark::State& state) {
   o.threads = static_cast<int>(state.range(1));
   o.ordering = state.range(2) == 1 ? HarmonicOrdering::Amd : HarmonicOrdering::NestedDissection;
   o.boundary = state.range(3) == 1 ? HarmonicBoundary::CutCell : HarmonicBoundary::ClosestPoint;
+  o.solver = state.range(4) == 1 ? HarmonicSolver::MultigridCg : HarmonicSolver::Direct;
   HarmonicReport r;
   for (auto _ : state) {
     Embedding e = bindHarmonic(mesh.vertices, cage, o, &r);
@@ -45,6 +48,7 @@ void BM_BindHarmonicBunny(benchmark::State& state) {
   state.counters["solve_s"] = r.solveSeconds;
   state.counters["lookup_s"] = r.lookupSeconds;
   state.counters["total_s"] = r.totalSeconds;
+  state.counters["cg_its"] = r.maxCgIterations;
   state.counters["unknowns"] = static_cast<double>(r.interiorNodes);
   state.counters["L_nnz"] = static_cast<double>(r.factorNonZeros);
   state.counters["lin_err"] = r.maxLinearError;
@@ -54,10 +58,10 @@ void BM_BindHarmonicBunny(benchmark::State& state) {
   state.counters["cage_vertices"] = static_cast<double>(cage.vertices.size());
 }
 BENCHMARK(BM_BindHarmonicBunny)
-    ->ArgsProduct({{32, 48, 64}, {1, 2}, {1}, {1}})
-    ->ArgsProduct({{32, 48, 64}, {1}, {0}, {1}})
-    ->ArgsProduct({{32, 48, 64}, {1}, {1}, {0}})
-    ->ArgNames({"res", "threads", "amd", "cut"})
+    ->ArgsProduct({{32, 48, 64}, {1, 2}, {1}, {1}, {0, 1}})
+    ->ArgsProduct({{32, 48, 64}, {1}, {0}, {1}, {0, 1}})
+    ->ArgsProduct({{32, 48, 64}, {1}, {1}, {0}, {0}})
+    ->ArgNames({"res", "threads", "amd", "cut", "cg"})
     ->UseRealTime()
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond);
