@@ -229,7 +229,7 @@ constexpr ParamRange kCageTightness{0.0, 1.0};
 // Interior lattice spacing, metres (interiorLattice bounds the count).
 constexpr ParamRange kInteriorSpacing{0.0, limits::coordinateLimit};
 // Harmonic grid cells along the cage's longest side; RBF shape (sim/cage/rbf.h).
-constexpr ParamRange kHarmonicResolution{4, 64};  // ~40 s at 64 (harmonic.h)
+constexpr ParamRange kHarmonicResolution{4, 64};  // ~5 s at 64 (harmonic.h)
 constexpr ParamRange kRbfShape{0.0, 10.0};
 constexpr ParamRange kLatticeMargin{0.0, 1.0};
 
