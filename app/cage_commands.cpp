@@ -93,9 +93,10 @@ struct MethodArgs {
 void addCommonOptions(CLI::App& app, std::string& cacheDir, int& threads, std::string& storage,
                       double& prune, MethodArgs& method) {
   app.add_option("--method", method.method,
-                 "Coordinates: mvc (mean value), harmonic (Laplace solve on a grid) or rbf "
-                 "(multiquadric, handles at the cage vertices)")
-      ->check(CLI::IsMember({"mvc", "harmonic", "rbf"}));
+                 "Coordinates: mvc (mean value), harmonic (Laplace solve on a grid), rbf "
+                 "(multiquadric, handles at the cage vertices) or green (Green coordinates: "
+                 "shape-preserving; the mesh must lie inside the cage)")
+      ->check(CLI::IsMember({"mvc", "harmonic", "rbf", "green"}));
   app.add_option("--resolution", method.resolution,
                  "harmonic: grid cells along the cage's longest side")
       ->check(CLI::Range(4, 64));
@@ -145,6 +146,9 @@ int runBindCommand(int argc, char** argv) {
     std::printf("mesh:               %s (%d vertices)\n", meshPath.c_str(), emb.meshVertexCount());
     std::printf("cage:               %s (%d vertices, %zu triangles)\n", cagePath.c_str(),
                 emb.cageVertexCount(), cageMesh.triangles.size());
+    if (emb.kind() == cage::EmbeddingKind::Green)
+      std::printf("controls:           %d (a weight per cage vertex and per face normal)\n",
+                  emb.weightColumns());
     if (s.fromCache)
       std::printf("time:               cached (%s)\n", cacheDir.c_str());
     else
@@ -153,7 +157,7 @@ int runBindCommand(int argc, char** argv) {
         "storage:            %s, %lld nonzeros (%.1f%%)\n", emb.isSparse() ? "sparse" : "dense",
         static_cast<long long>(emb.nonZeros()),
         100.0 * static_cast<double>(emb.nonZeros()) /
-            std::max(1.0, static_cast<double>(emb.meshVertexCount()) * emb.cageVertexCount()));
+            std::max(1.0, static_cast<double>(emb.meshVertexCount()) * emb.weightColumns()));
     std::printf("weights:            min %.6g, max %.6g, %lld negative\n", s.minWeight, s.maxWeight,
                 static_cast<long long>(s.negativeCount));
     std::printf("sum error:          %.3g (max |sum w - 1|)\n", s.maxSumError);

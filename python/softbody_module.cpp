@@ -615,8 +615,9 @@ PYBIND11_MODULE(softbody, m) {
         cage::EmbeddingMethod how;
         if (!cage::parseEmbeddingKind(method, &how.kind) ||
             how.kind == cage::EmbeddingKind::FfdBernstein ||
-            how.kind == cage::EmbeddingKind::FfdBSpline || how.kind == cage::EmbeddingKind::Green)
-          throw py::value_error("method must be 'mvc', 'harmonic' or 'rbf', got '" + method + "'");
+            how.kind == cage::EmbeddingKind::FfdBSpline)
+          throw py::value_error("method must be 'mvc', 'harmonic', 'rbf' or 'green', got '" +
+                                method + "'");
         if (resolution < 4 || resolution > 64)  // ~5 s at 64 (harmonic.h)
           throw py::value_error("resolution must be in [4, 64], got " + std::to_string(resolution));
         how.harmonic.resolution = resolution;
@@ -631,7 +632,9 @@ PYBIND11_MODULE(softbody, m) {
       "points"_a, "cage_vertices"_a, "cage_triangles"_a, "method"_a = "mvc",
       "resolution"_a = cage::HarmonicOptions{}.resolution, "shape"_a = cage::RbfOptions{}.shape,
       "Coordinates of points (V, 3) in a closed cage: method 'mvc' (mean value), 'harmonic' "
-      "(grid of `resolution` cells along the cage's longest side, in [4, 64]) or 'rbf' "
-      "(multiquadric, shape in [0, 10]); ValueError for an open or inverted cage or a bad "
+      "(grid of `resolution` cells along the cage's longest side, in [4, 64]), 'rbf' "
+      "(multiquadric, shape in [0, 10]) or 'green' (Green coordinates, shape-preserving; "
+      "every point inside the cage); deform takes the cage's vertices for every method. "
+      "ValueError for an open or inverted cage, a point outside the cage (green) or a bad "
       "option.");
 }

@@ -1,9 +1,11 @@
 #include "sim/cage/bind.h"
 
+#include <memory>
 #include <stdexcept>
 
 #include "sim/base/hasher.h"
 #include "sim/base/parallel.h"
+#include "sim/cage/green.h"
 #include "sim/mesh/closed_surface.h"
 
 namespace sb::cage {
@@ -42,29 +44,35 @@ Embedding bindToCage(const std::vector<Vec3>& points, const mesh::TriangleMesh& 
       return bindMeanValue(points, cage, options);  // its own cache key, unchanged
     case EmbeddingKind::Harmonic:
     case EmbeddingKind::Rbf:
+    case EmbeddingKind::Green:
       break;
     case EmbeddingKind::FfdBernstein:
     case EmbeddingKind::FfdBSpline:
       throw std::invalid_argument(std::string("bind: '") + embeddingKindName(method.kind) +
                                   "' is driven by a lattice, not a cage (bindFfd)");
-    case EmbeddingKind::Green:
-      // W has a column per cage vertex and per face: W · cage vertices is not the deformed mesh.
-      throw std::invalid_argument(
-          "bind: 'green' deforms with extended controls (cage vertices and face normals): use "
-          "bindGreen and greenControls (green.h)");
   }
   mesh::validateClosedSurface(cage, "cage");
   std::array<std::uint64_t, 2> key{};
   std::string path;
+  // Green weights have a column per cage vertex and one per face (their scaled normals).
+  const bool green = method.kind == EmbeddingKind::Green;
+  const int columns = int(cage.vertices.size() + (green ? cage.triangles.size() : 0));
   if (!options.cacheDir.empty()) {
     key = methodCacheKey(points, cage, method, options);
     path = bindCachePath(options.cacheDir, key);
-    if (std::optional<Embedding> cached = loadCachedBind(path, key, method.kind, int(points.size()),
-                                                         int(cage.vertices.size()), options))
+    if (std::optional<Embedding> cached =
+            loadCachedBind(path, key, method.kind, int(points.size()), columns, options)) {
+      if (green) cached->attachGreenCage(std::make_shared<const mesh::TriangleMesh>(cage));
       return std::move(*cached);
+    }
   }
   Embedding e;
-  if (method.kind == EmbeddingKind::Harmonic) {
+  if (green) {
+    GreenOptions g;
+    g.threads = options.threads;
+    g.keepDoublePrecision = options.keepDoublePrecision;
+    e = bindGreen(points, cage, g);  // attaches the cage
+  } else if (method.kind == EmbeddingKind::Harmonic) {
     HarmonicOptions h = method.harmonic;
     if (h.threads <= 0) h.threads = options.threads;
     e = bindHarmonic(points, cage, h);

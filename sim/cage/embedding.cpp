@@ -16,6 +16,7 @@
 #include "sim/base/file_io.h"
 #include "sim/base/parallel_for.h"
 #include "sim/cage/deform_kernels.h"
+#include "sim/cage/green.h"
 #include "sim/cage/mvc.h"
 #include "sim/mesh/closed_surface.h"
 
@@ -146,6 +147,21 @@ void Embedding::swap(Embedding& other) noexcept {
   sparseD_.swap(other.sparseD_);
   sparseF_.swap(other.sparseF_);
   std::swap(stats_, other.stats_);
+  greenCage_.swap(other.greenCage_);
+  std::swap(greenCageVertices_, other.greenCageVertices_);
+}
+
+void Embedding::attachGreenCage(std::shared_ptr<const mesh::TriangleMesh> restCage) {
+  if (kind_ != EmbeddingKind::Green || !restCage)
+    throw std::invalid_argument("Embedding::attachGreenCage: not a Green embedding, or no cage");
+  const std::size_t controls = restCage->vertices.size() + restCage->triangles.size();
+  if (controls != std::size_t(cols_))
+    throw std::invalid_argument("Embedding::attachGreenCage: a cage of " +
+                                std::to_string(restCage->vertices.size()) + " vertices and " +
+                                std::to_string(restCage->triangles.size()) + " faces for " +
+                                std::to_string(cols_) + " weight columns");
+  greenCageVertices_ = static_cast<int>(restCage->vertices.size());
+  greenCage_ = std::move(restCage);
 }
 
 Embedding Embedding::fromSparse(SparseD&& weights, bool keepDouble) {
@@ -194,6 +210,24 @@ void Embedding::deform(ConstPointsRef cagePositions, PointsRowMajor& out) const 
 
 void Embedding::deformMany(const std::vector<ConstPointsRef>& cages,
                            const std::vector<PointsRowMajor*>& outs) const {
+  if (!greenCage_) return deformWeights(cages, outs);
+  // Green: the cage vertices and each face's stretch × outward normal, in double (the face
+  // frames are a cross product of differences), then the float product like every kind.
+  std::vector<PointsRowMajor> extended(cages.size());
+  std::vector<ConstPointsRef> controls;
+  for (std::size_t k = 0; k < cages.size(); ++k) {
+    if (cages[k].rows() != greenCageVertices_)
+      throw std::invalid_argument("Embedding::deform: got " + std::to_string(cages[k].rows()) +
+                                  " cage positions, the Green cage has " +
+                                  std::to_string(greenCageVertices_));
+    extended[k] = greenControls(*greenCage_, cages[k].cast<double>()).cast<float>();
+    controls.emplace_back(extended[k]);
+  }
+  deformWeights(controls, outs);
+}
+
+void Embedding::deformWeights(const std::vector<ConstPointsRef>& cages,
+                              const std::vector<PointsRowMajor*>& outs) const {
   if (cages.size() != outs.size())
     throw std::invalid_argument("Embedding::deformMany: " + std::to_string(cages.size()) +
                                 " cages but " + std::to_string(outs.size()) + " outputs");
@@ -242,18 +276,23 @@ void Embedding::deformMany(const std::vector<ConstPointsRef>& cages,
 
 void Embedding::deformDouble(const Eigen::Matrix<double, Eigen::Dynamic, 3>& cagePositions,
                              Eigen::Matrix<double, Eigen::Dynamic, 3>& out) const {
-  if (cagePositions.rows() != cols_)
-    throw std::invalid_argument("Embedding::deformDouble: wrong number of cage positions");
+  if (cagePositions.rows() != cageVertexCount())
+    throw std::invalid_argument(
+        "Embedding::deformDouble: got " + std::to_string(cagePositions.rows()) +
+        " cage positions, the embedding takes " + std::to_string(cageVertexCount()));
+  Eigen::Matrix<double, Eigen::Dynamic, 3> extended;
+  if (greenCage_) extended = greenControls(*greenCage_, cagePositions);
+  const Eigen::Matrix<double, Eigen::Dynamic, 3>& controls = greenCage_ ? extended : cagePositions;
   if (hasDouble_) {
     if (sparse_)
-      out.noalias() = sparseD_ * cagePositions;
+      out.noalias() = sparseD_ * controls;
     else
-      out.noalias() = denseD_ * cagePositions;
+      out.noalias() = denseD_ * controls;
   } else {
     if (sparse_)
-      out.noalias() = sparseF_.cast<double>() * cagePositions;
+      out.noalias() = sparseF_.cast<double>() * controls;
     else
-      out.noalias() = denseF_.cast<double>() * cagePositions;
+      out.noalias() = denseF_.cast<double>() * controls;
   }
 }
 
@@ -471,7 +510,7 @@ std::optional<Embedding> loadCachedBind(const std::string& path,
     std::array<std::uint64_t, 2> stored{};
     Embedding e = Embedding::load(path, &stored);
     if (stored != key || e.kind() != kind || e.meshVertexCount() != rows ||
-        e.cageVertexCount() != cols)
+        e.weightColumns() != cols)
       throw std::runtime_error(path + ": key, kind or size mismatch");
     e.stats().fromCache = true;
     e.stats().seconds = 0.0;
@@ -495,7 +534,7 @@ void measureWeights(Embedding& e, const std::vector<Vec3>& points,
                     const std::vector<Vec3>& controls) {
   const int n = e.meshVertexCount();
   if (static_cast<int>(points.size()) != n ||
-      static_cast<int>(controls.size()) != e.cageVertexCount())
+      static_cast<int>(controls.size()) != e.weightColumns())
     throw std::invalid_argument("measureWeights: " + std::to_string(points.size()) +
                                 " points and " + std::to_string(controls.size()) +
                                 " controls for a " + std::to_string(n) + " × " +

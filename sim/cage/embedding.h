@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
@@ -110,12 +111,24 @@ class Embedding {
   void setKind(EmbeddingKind kind) { kind_ = kind; }
 
   int meshVertexCount() const { return rows_; }
-  int cageVertexCount() const { return cols_; }
+  // The rows deform() takes: the columns of W, or, with a Green rest cage attached, its vertices.
+  int cageVertexCount() const { return greenCage_ ? greenCageVertices_ : cols_; }
+  int weightColumns() const { return cols_; }  // columns of W
+  // Green coordinates (green.h) weigh the cage's vertices and its faces' scaled normals: W has
+  // V + F columns. Attaching the rest cage they were bound to (vertices in the bind's
+  // coordinates, outward triangles) makes deform, deformMany and deformDouble take the V cage
+  // vertices like every other kind and extend them with greenControls themselves; bindGreen and
+  // bindToCage attach it. Without it (a Green weight file loaded alone) they take the V + F
+  // extended controls. Throws std::invalid_argument unless the kind is Green and the cage has
+  // V + F = weightColumns().
+  void attachGreenCage(std::shared_ptr<const mesh::TriangleMesh> restCage);
+  const mesh::TriangleMesh* greenCage() const { return greenCage_.get(); }
   bool isSparse() const { return sparse_; }
   std::int64_t nonZeros() const;
   bool hasDoubleWeights() const { return hasDouble_; }
 
-  // out = W · cagePositions (#mesh × 3), float, one matrix product.
+  // out = W · cagePositions (#mesh × 3, cagePositions cageVertexCount() × 3), float, one matrix
+  // product (a Green embedding with its cage extends the positions first: attachGreenCage).
   void deform(ConstPointsRef cagePositions, PointsRowMajor& out) const;
   // deform for several cages at once (bodies sharing this embedding): *outs[k] = W · cages[k],
   // each bit-identical to deform(cages[k], *outs[k]). Each block of W's rows serves every cage
@@ -145,8 +158,13 @@ class Embedding {
 
  private:
   void makeFloat();
+  // deformMany on positions with one row per column of W.
+  void deformWeights(const std::vector<ConstPointsRef>& controls,
+                     const std::vector<PointsRowMajor*>& outs) const;
 
   int rows_ = 0, cols_ = 0;
+  std::shared_ptr<const mesh::TriangleMesh> greenCage_;  // attachGreenCage
+  int greenCageVertices_ = 0;
   EmbeddingKind kind_ = EmbeddingKind::MeanValue;
   bool sparse_ = false;
   bool hasDouble_ = false;
@@ -160,7 +178,8 @@ class Embedding {
 // Fills e's statistics that W alone determines, for binds that do not measure while binding:
 // nonZeros, the weight range and negative count, max |Σ_j W_ij − 1| and the linear error
 // max_i |Σ_j W_ij c_j − x_i| / (diagonal of the controls' box), also as unprunedLinearError.
-// points: the bound points (#rows); controls: the controls' rest positions (#columns).
+// points: the bound points (#rows); controls: the controls' rest positions (one per column of
+// W).
 // Throws std::runtime_error on a non-finite weight (a bind that failed silently).
 void measureWeights(Embedding& e, const std::vector<Eigen::Vector3d>& points,
                     const std::vector<Eigen::Vector3d>& controls);
@@ -177,9 +196,9 @@ std::array<std::uint64_t, 2> bindCacheKey(const std::vector<Eigen::Vector3d>& po
 std::string bindCachePath(const std::string& cacheDir, const std::array<std::uint64_t, 2>& key);
 
 // The bind cache's two halves, for every kind of bind: the weights stored at path when the file
-// is intact and its key, kind and size match (else nothing, with a warning through
-// options.warning when a file was there but unusable), and the store (atomic; a failure is only
-// a warning).
+// is intact and its key, kind and size (rows × cols, the columns of W) match (else nothing, with a
+// warning through options.warning when a file was there but unusable), and the store (atomic; a
+// failure is only a warning).
 std::optional<Embedding> loadCachedBind(const std::string& path,
                                         const std::array<std::uint64_t, 2>& key, EmbeddingKind kind,
                                         int rows, int cols, const BindOptions& options);

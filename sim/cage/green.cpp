@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -225,6 +226,7 @@ Embedding bindGreen(const std::vector<Vec3>& points, const mesh::TriangleMesh& c
 
   Embedding e = Embedding::fromDense(std::move(W), options.keepDoublePrecision);
   e.setKind(EmbeddingKind::Green);
+  e.attachGreenCage(std::make_shared<const mesh::TriangleMesh>(cage));
   st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   e.stats() = st;
   return e;
@@ -251,9 +253,12 @@ Eigen::Matrix<double, Eigen::Dynamic, 3> greenControls(
     const Vec3 u = b - a, v = cc - a, u2 = b2 - a2, v2 = c2 - a2;
     const Vec3 cr = u2.cross(v2);
     const double cn = cr.norm();
-    if (!(cn > 0.0))
-      throw std::invalid_argument("greenControls: deformed triangle " + std::to_string(j) +
-                                  " has zero area (its normal is undefined)");
+    // A deformed triangle crushed to a line or a point has no normal: its face term is left
+    // out (a simulated cage can pass through such a pose; the map stays finite there).
+    if (!(cn > 0.0)) {
+      out.row(V + j).setZero();
+      continue;
+    }
     const double area = 0.5 * u.cross(v).norm();
     // The paper's 3-D stretch: 1 at rest, k under a uniform scale by k.
     const double q = u2.squaredNorm() * v.squaredNorm() - 2.0 * u2.dot(v2) * u.dot(v) +

@@ -47,7 +47,9 @@ struct GreenOptions {
 
 // W (#points × (V + F), dense, kind EmbeddingKind::Green) with W = [φ | ψ]: columns 0 … V−1
 // the vertex coordinates φ_i, columns V … V+F−1 the face coordinates ψ_j (face order of
-// cage.triangles; units: metres — W · greenControls(...) is in the cage's units). Points in the
+// cage.triangles; units: metres — W · greenControls(...) is in the cage's units). The cage is
+// attached (Embedding::attachGreenCage): deform(deformed cage vertices, V × 3) extends them
+// with greenControls and gives the deformed points. Points in the
 // cage's units. Validates the cage with mesh::validateClosedSurface (throws mesh::SurfaceError:
 // open, non-manifold, inverted, degenerate). Refuses (std::invalid_argument, naming the point's
 // index and position) a non-finite point, a point outside the cage and a point on it (within
@@ -61,9 +63,10 @@ Embedding bindGreen(const std::vector<Vec3>& points, const mesh::TriangleMesh& c
 // The extended controls ((V + F) × 3, metres) for the cage `restCage` (connectivity and rest
 // positions) moved to `deformed` (V × 3, one row per cage vertex): rows 0 … V−1 the deformed
 // vertices, row V + j = s_j · n(t'_j) (stretch factor times deformed unit outward normal of
-// triangle j). So bindGreen(points, restCage).deformDouble(greenControls(restCage, deformed))
-// is the deformed points. Throws std::invalid_argument on a size mismatch, and on a deformed
-// triangle of zero area (its normal is undefined).
+// triangle j): W · greenControls(restCage, deformed) is the deformed points (what deform does
+// with the attached cage). A deformed triangle of zero area has no normal: its row is zero (the
+// face term is left out; the map stays finite). Throws std::invalid_argument on a size
+// mismatch.
 Eigen::Matrix<double, Eigen::Dynamic, 3> greenControls(
     const mesh::TriangleMesh& restCage, const Eigen::Matrix<double, Eigen::Dynamic, 3>& deformed);
 

@@ -249,15 +249,11 @@ cage::EmbeddingMethod parseEmbedding(Fields& f) {
   }
   const std::string field = options ? "embedding.method" : "embedding";
   if (!cage::parseEmbeddingKind(name, &m.kind))
-    f.fail(field, "must be mvc, harmonic or rbf, got '" + name + "'");
+    f.fail(field, "must be mvc, harmonic, rbf or green, got '" + name + "'");
   if (m.kind == cage::EmbeddingKind::FfdBernstein || m.kind == cage::EmbeddingKind::FfdBSpline)
     f.fail(field, "'" + name +
                       "' is how a lattice body's render mesh follows it: give the body a "
-                      "\"lattice\" instead, or use mvc, harmonic or rbf");
-  if (m.kind == cage::EmbeddingKind::Green)
-    f.fail(field,
-           "'green' needs the cage's face normals as extra controls, which scene bodies "
-           "do not feed yet: use mvc, harmonic or rbf (or sim/cage/green.h directly)");
+                      "\"lattice\" instead, or use mvc, harmonic, rbf or green");
   if (options) {
     if (m.kind == cage::EmbeddingKind::Harmonic)
       m.harmonic.resolution =
@@ -474,9 +470,11 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMe
     render->path = renderPath;
     render->triangles = detail.triangles;
     try {
-      // Mean value, harmonic (a grid on the cage's box) and RBF (shape relative to the handle
-      // spacing) coordinates are invariant under the placement's similarity transform: bind in
-      // file coordinates so the cache is shared by every placement of the same mesh.
+      // Mean value, harmonic (a grid on the cage's box), RBF (shape relative to the handle
+      // spacing) and Green coordinates (their face frames' stretch is taken against the cage in
+      // file coordinates, so a placement's scale enters as it) are invariant under the
+      // placement's similarity transform: bind in file coordinates so the cache is shared by
+      // every placement of the same mesh.
       render->embedding = std::make_shared<cage::Embedding>(
           sb.latticeFrame ? cage::bindFfd(detail.vertices, *sb.latticeFrame)
                           : cage::bindToCage(detail.vertices, mesh, sb.embedding, options));

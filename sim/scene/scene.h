@@ -74,8 +74,9 @@ struct SceneBody {
   int cageVertexCount = 0;
   std::vector<std::array<int, 3>> cageTriangles;  // the particle mesh's faces (may be empty)
   std::shared_ptr<RenderMesh> render;             // null when the body has no render mesh
-  // "embedding": how the render mesh follows the cage: "mvc" (the default), "harmonic" or "rbf",
-  // or an object {"method": …, "resolution": n (harmonic), "shape": s (rbf)} (sim/cage/bind.h).
+  // "embedding": how the render mesh follows the cage: "mvc" (the default), "harmonic", "rbf" or
+  // "green" (the render mesh must lie inside the cage), or an object {"method": …,
+  // "resolution": n (harmonic), "shape": s (rbf)} (sim/cage/bind.h).
   cage::EmbeddingMethod embedding;
   // The transform and scale applied to the file's vertices, kept so the scene can be saved.
   Vec3 translation = Vec3::Zero();

@@ -8,6 +8,7 @@
 
 #include "sim/cage/embedding.h"
 #include "sim/cage/fold_check.h"
+#include "sim/cage/green.h"
 #include "sim/cage/rbf.h"
 #include "sim/mesh/mesh_io.h"
 #include "tests/cage/cage_test_data.h"
@@ -87,6 +88,25 @@ TEST(FoldCheck, WorksForAnyEmbedding) {
   EXPECT_EQ(checkFolds(probes, moved).folded, 0);
   for (Eigen::Index j = 0; j < moved.rows(); ++j) moved(j, 0) = -moved(j, 0);  // mirrored
   EXPECT_EQ(checkFolds(probes, moved).folded, int(s.samples.size()));
+}
+
+// Green coordinates take the cage's vertices like the others (their face frames are added by
+// the embedding): a cage at rest does not fold, one pushed through itself does.
+TEST(FoldCheck, ChecksGreenMapsThroughTheCageVertices) {
+  const mesh::TriangleMesh cage = mesh::testing::makeBox(2, 2, 2);
+  const FoldSampling s = foldSamples(cage, 500);
+  const FoldProbes probes = makeFoldProbes(
+      s.samples, s.step, [&](const std::vector<Vec3>& p) { return bindGreen(p, cage); });
+  MatX3d moved = toMatrix(cage.vertices);
+  const FoldReport rest = checkFolds(probes, moved);
+  EXPECT_EQ(rest.folded, 0);
+  EXPECT_NEAR(rest.minDeterminant, 1.0, 1e-6);
+  int top = -1;
+  for (int j = 0; j < int(cage.vertices.size()); ++j)
+    if ((cage.vertices[size_t(j)] - Vec3(0.5, 0.5, 1.0)).norm() < 1e-12) top = j;
+  ASSERT_GE(top, 0);
+  moved(top, 2) = -0.8;
+  EXPECT_GT(checkFolds(probes, moved).folded, 0);
 }
 
 TEST(FoldCheck, RefusesBadInput) {

@@ -57,9 +57,9 @@ std::vector<Vec3> boxPoints(int n, const Vec3& lo, const Vec3& hi, unsigned seed
   return p;
 }
 
-MatX3d deformed(const Embedding& e, const mesh::TriangleMesh& cage, const MatX3d& moved) {
+MatX3d deformed(const Embedding& e, const MatX3d& moved) {
   MatX3d out;
-  e.deformDouble(greenControls(cage, moved), out);
+  e.deformDouble(moved, out);  // the attached cage extends the vertices (greenControls)
   return out;
 }
 
@@ -69,9 +69,10 @@ TEST(Green, RestPoseReproducesThePointsAndPhiSumsToOne) {
   const Embedding e = bindGreen(points, cage);
   EXPECT_EQ(e.kind(), EmbeddingKind::Green);
   const int V = int(cage.vertices.size()), F = int(cage.triangles.size());
-  ASSERT_EQ(e.cageVertexCount(), V + F);
+  ASSERT_EQ(e.weightColumns(), V + F);
+  ASSERT_EQ(e.cageVertexCount(), V);
   ASSERT_EQ(e.meshVertexCount(), int(points.size()));
-  const MatX3d out = deformed(e, cage, toMatrix(cage.vertices));
+  const MatX3d out = deformed(e, toMatrix(cage.vertices));
   const double diag = mesh::testing::diagonal(cage);
   double err = 0.0, sumErr = 0.0;
   std::vector<std::pair<int, double>> row;
@@ -110,7 +111,7 @@ TEST(Green, SimilarityOfTheCageMovesEveryPointTheSame) {
     MatX3d moved = toMatrix(cage.vertices);
     for (Eigen::Index j = 0; j < moved.rows(); ++j)
       moved.row(j) = (k * R * moved.row(j).transpose() + t).transpose();
-    const MatX3d out = deformed(e, cage, moved);
+    const MatX3d out = deformed(e, moved);
     double err = 0.0;
     for (std::size_t i = 0; i < points.size(); ++i)
       err = std::max(err, (out.row(Eigen::Index(i)).transpose() - (k * R * points[i] + t)).norm());
@@ -123,7 +124,7 @@ TEST(Green, SimilarityOfTheCageMovesEveryPointTheSame) {
   S(0, 1) = 0.5;
   for (Eigen::Index j = 0; j < sheared.rows(); ++j)
     sheared.row(j) = (S * sheared.row(j).transpose()).transpose();
-  const MatX3d out = deformed(e, cage, sheared);
+  const MatX3d out = deformed(e, sheared);
   double err = 0.0;
   for (std::size_t i = 0; i < points.size(); ++i)
     err = std::max(err, (out.row(Eigen::Index(i)).transpose() - S * points[i]).norm());
@@ -224,10 +225,10 @@ TEST(Green, ClosedFormsMatchQuadratureOfTheBoundaryIntegrals) {
 // coordinates keep the map closer to a similarity. Measured (mean over the points): parabolic
 // bend green 0.156, mvc 0.402; circular bend green 0.085, mvc 0.113 (the cage map itself is far
 // from conformal there: its fibres stretch by 1 ± y/ρ).
-double meanConformalityError(const Embedding& e, const MatX3d& controls,
+double meanConformalityError(const Embedding& e, const MatX3d& cage,
                              const std::vector<Vec3>& centres, double delta) {
   MatX3d out;
-  e.deformDouble(controls, out);
+  e.deformDouble(cage, out);
   double sum = 0.0;
   for (std::size_t c = 0; c < centres.size(); ++c) {
     Eigen::Matrix3d J;
@@ -260,7 +261,7 @@ TEST(Green, BendingKeepsShapesCloserToSimilaritiesThanMeanValueCoordinates) {
     MatX3d moved(Eigen::Index(bar.vertices.size()), 3);
     for (std::size_t v = 0; v < bar.vertices.size(); ++v)
       moved.row(Eigen::Index(v)) = bend(bar.vertices[v]).transpose();
-    return std::make_pair(meanConformalityError(green, greenControls(bar, moved), centres, delta),
+    return std::make_pair(meanConformalityError(green, moved, centres, delta),
                           meanConformalityError(mvc, moved, centres, delta));
   };
   // Parabolic bend y += 0.2 x².
@@ -306,7 +307,7 @@ TEST(Green, PointsCloseToTheCageKeepTheIdentities) {
       }
     }
     const Embedding e = bindGreen(points, box);
-    const MatX3d out = deformed(e, box, toMatrix(box.vertices));
+    const MatX3d out = deformed(e, toMatrix(box.vertices));
     std::vector<std::pair<int, double>> row;
     for (std::size_t i = 0; i < points.size(); ++i) {
       const double err = (out.row(Eigen::Index(i)).transpose() - points[i]).norm();
@@ -355,6 +356,50 @@ TEST_F(GreenFile, KindAndWeightsSurviveAWeightFile) {
   }
 }
 
+// With the rest cage attached (bindGreen does it), deform takes the V cage vertices and equals
+// the weights times the extended controls built here by hand, in float and in double; the same
+// weights without the cage (a weight file loaded alone) take the V + F extended controls.
+TEST_F(GreenFile, AnAttachedCageExtendsTheVerticesInEveryDeform) {
+  const auto& cage = bunnyCage();
+  const std::vector<Vec3> points(bunny().vertices.begin(), bunny().vertices.begin() + 300);
+  const Embedding e = bindGreen(points, cage);
+  ASSERT_NE(e.greenCage(), nullptr);
+  const int V = int(cage.vertices.size()), F = int(cage.triangles.size());
+  EXPECT_EQ(e.cageVertexCount(), V);
+  EXPECT_EQ(e.weightColumns(), V + F);
+  MatX3d moved(V, 3);
+  for (int v = 0; v < V; ++v) {
+    const Vec3& p = cage.vertices[size_t(v)];
+    moved.row(v) = Vec3(p.x() + 0.3 * p.y() * p.y(), 1.2 * p.y(), p.z() - 0.2 * p.x()).transpose();
+  }
+  const MatX3d controls = greenControls(cage, moved);
+  std::vector<std::pair<int, double>> row;
+  MatX3d byHand(Eigen::Index(points.size()), 3);
+  for (int i = 0; i < int(points.size()); ++i) {
+    e.rowWeights(i, row);
+    Vec3 x = Vec3::Zero();
+    for (const auto& [j, w] : row) x += w * controls.row(j).transpose();
+    byHand.row(i) = x.transpose();
+  }
+  EXPECT_LT((deformed(e, moved) - byHand).cwiseAbs().maxCoeff(), 1e-12);
+  PointsRowMajor outF;
+  e.deform(moved.cast<float>(), outF);
+  EXPECT_LT((outF.cast<double>() - byHand).cwiseAbs().maxCoeff(), 1e-4);
+  EXPECT_THROW(e.deform(controls.cast<float>(), outF), std::invalid_argument);  // V + F rows
+
+  e.save(path("green.bin"));
+  const Embedding alone = Embedding::load(path("green.bin"));
+  EXPECT_EQ(alone.kind(), EmbeddingKind::Green);
+  EXPECT_EQ(alone.greenCage(), nullptr);
+  EXPECT_EQ(alone.cageVertexCount(), V + F);
+  MatX3d outAlone;
+  alone.deformDouble(controls, outAlone);
+  EXPECT_LT((outAlone - byHand).cwiseAbs().maxCoeff(), 1e-12);
+  Embedding other = bindMeanValue(points, cage);
+  EXPECT_THROW(other.attachGreenCage(std::make_shared<const mesh::TriangleMesh>(cage)),
+               std::invalid_argument);
+}
+
 TEST(Green, RefusesBadInput) {
   const mesh::TriangleMesh box = makeBox(1, 1, 1);
   auto message = [&](const std::vector<Vec3>& points, const mesh::TriangleMesh& cage) {
@@ -386,6 +431,22 @@ TEST(Green, RefusesBadInput) {
   // Not a refusal: a point a hair inside a face.
   EXPECT_NO_THROW(bindGreen({{0.3, 0.6, 1.0 - 1e-9}}, box));
   EXPECT_THROW(greenControls(box, MatX3d::Zero(3, 3)), std::invalid_argument);
+}
+
+// A deformed triangle crushed to a segment has no normal: its face control is zero and the
+// deform stays finite.
+TEST(Green, ACrushedFaceContributesNothingAndStaysFinite) {
+  const mesh::TriangleMesh box = makeBox(1, 1, 1, Vec3(1.0, 1.0, 1.0), Vec3::Zero());
+  MatX3d moved(Eigen::Index(box.vertices.size()), 3);
+  for (std::size_t v = 0; v < box.vertices.size(); ++v)
+    moved.row(Eigen::Index(v)) = box.vertices[v].transpose();
+  const auto& t = box.triangles[0];
+  moved.row(t[2]) = 0.5 * (moved.row(t[0]) + moved.row(t[1]));  // triangle 0 becomes a segment
+  const MatX3d controls = greenControls(box, moved);
+  EXPECT_EQ(controls.row(Eigen::Index(box.vertices.size())).norm(), 0.0);
+  EXPECT_TRUE(controls.allFinite());
+  const Embedding e = bindGreen({{0.5, 0.5, 0.5}, {0.2, 0.7, 0.4}}, box);
+  EXPECT_TRUE(deformed(e, moved).allFinite());
 }
 
 }  // namespace

@@ -280,6 +280,15 @@ def test_bind_methods():
         moved = e.deform(cage_v @ a.T + [1.0, 2.0, 3.0])
         # mvc and rbf reproduce affine maps exactly; harmonic to its grid's precision.
         assert np.abs(moved - (points @ a.T + [1.0, 2.0, 3.0])).max() < tol, method
+    # green reproduces similarities (not every affine map), from the cage's vertices alone.
+    e = sb.bind(points, cage_v, cage_f, method="green")
+    assert e.method == "green"
+    c, s = np.cos(0.4), np.sin(0.4)
+    similar = 1.3 * np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    moved = e.deform(cage_v @ similar.T + [1.0, 2.0, 3.0])
+    assert np.abs(moved - (points @ similar.T + [1.0, 2.0, 3.0])).max() < 1e-5
+    with pytest.raises(ValueError, match="outside the cage"):
+        sb.bind(np.array([[0.0, 0.0, 0.0], [1.5, 0.0, 0.0]]), cage_v, cage_f, method="green")
     with pytest.raises(ValueError, match="method must be"):
         sb.bind(points, cage_v, cage_f, method="ffd-bspline")
     with pytest.raises(ValueError, match=r"resolution must be in \[4, 64\]"):

@@ -329,13 +329,16 @@ TEST(Scene, EmbeddingMethodPerBody) {
       {"name": "r2", )" + pair +
                            R"(, "embedding": {"method": "rbf", "shape": 1}},
       {"name": "r3", )" + pair +
-                           R"(, "embedding": {"method": "rbf", "shape": 0.5}}]})";
+                           R"(, "embedding": {"method": "rbf", "shape": 0.5}},
+      {"name": "g", )" + pair +
+                           R"(, "embedding": "green"}]})";
   const Scene scene = parseScene(text, "embedding.json", "");
-  ASSERT_EQ(scene.bodies.size(), 5u);
-  const cage::EmbeddingKind kinds[] = {cage::EmbeddingKind::MeanValue,
-                                       cage::EmbeddingKind::Harmonic, cage::EmbeddingKind::Rbf,
-                                       cage::EmbeddingKind::Rbf, cage::EmbeddingKind::Rbf};
-  for (size_t i = 0; i < 5; ++i) {
+  constexpr size_t kBodies = 6;
+  ASSERT_EQ(scene.bodies.size(), kBodies);
+  const cage::EmbeddingKind kinds[] = {
+      cage::EmbeddingKind::MeanValue, cage::EmbeddingKind::Harmonic, cage::EmbeddingKind::Rbf,
+      cage::EmbeddingKind::Rbf,       cage::EmbeddingKind::Rbf,      cage::EmbeddingKind::Green};
+  for (size_t i = 0; i < kBodies; ++i) {
     ASSERT_TRUE(scene.bodies[i].render);
     EXPECT_EQ(scene.bodies[i].render->embedding->kind(), kinds[i]) << i;
     EXPECT_EQ(scene.bodies[i].embedding.kind, kinds[i]) << i;
@@ -347,7 +350,7 @@ TEST(Scene, EmbeddingMethodPerBody) {
   const mesh::TriangleMesh cageMesh = mesh::readMesh(kAssets + "/meshes/suzanne_cage.obj");
   Eigen::AlignedBox3d box;
   for (const Vec3& v : cageMesh.vertices) box.extend(v);
-  for (size_t i = 0; i < 5; ++i) {
+  for (size_t i = 0; i < kBodies; ++i) {
     PointsRowMajor rendered;
     scene.renderVertices(int(i), rendered);
     ASSERT_EQ(size_t(rendered.rows()), detail.vertices.size());
@@ -369,8 +372,9 @@ TEST(Scene, EmbeddingMethodPerBody) {
   }();
   EXPECT_EQ(saved.find("\"mvc\""), std::string::npos) << saved;
   const Scene back = loadScene(path);
-  ASSERT_EQ(back.bodies.size(), 5u);
-  for (size_t i = 0; i < 5; ++i) EXPECT_EQ(back.bodies[i].render->embedding->kind(), kinds[i]);
+  ASSERT_EQ(back.bodies.size(), kBodies);
+  for (size_t i = 0; i < kBodies; ++i)
+    EXPECT_EQ(back.bodies[i].render->embedding->kind(), kinds[i]);
   EXPECT_EQ(back.bodies[1].embedding.harmonic.resolution, 16);
   EXPECT_EQ(back.bodies[4].embedding.rbf.shape, 0.5);
   ::unsetenv("SOFTBODY_CACHE_DIR");
@@ -409,6 +413,52 @@ TEST(FoldWatch, FindsTheBodyTurnedInsideOut) {
   EXPECT_EQ(folds[0].body, 1);
   EXPECT_EQ(folds[0].report.folded, folds[0].report.samples);
   EXPECT_NEAR(folds[0].report.minDeterminant, -1.0, 1e-3);
+}
+
+// A Green body is bound in the mesh file's coordinates and placed scaled and rotated: its face
+// frames must carry the placement's scale (stretch against the file's cage) and rotation. At
+// rest it shows the placed mesh; moved by a similarity (rotation, uniform scale 0.8,
+// translation) its mesh moves by exactly that similarity (Green coordinates reproduce them).
+TEST(Scene, GreenBodyFollowsItsPlacementAndSimilarities) {
+  Scene scene = parseScene(R"({"bodies": [{"name": "g", "mesh": ")" + kAssets +
+                               R"(/meshes/suzanne_cage.obj", "renderMesh": ")" + kAssets +
+                               R"(/meshes/suzanne.obj", "embedding": "green", "scale": 1.5,
+                                 "rotationDegrees": [10, 40, 0], "translation": [1, 2, 3]}]})",
+                           "green.json", "");
+  const SceneBody& b = scene.bodies[0];
+  ASSERT_TRUE(b.render);
+  ASSERT_EQ(b.render->embedding->kind(), cage::EmbeddingKind::Green);
+  const mesh::TriangleMesh detail = mesh::readMesh(kAssets + "/meshes/suzanne.obj");
+  const Mat3 R = (Eigen::AngleAxisd(0.0, Vec3::UnitZ()) *
+                  Eigen::AngleAxisd(40.0 * M_PI / 180.0, Vec3::UnitY()) *
+                  Eigen::AngleAxisd(10.0 * M_PI / 180.0, Vec3::UnitX()))
+                     .toRotationMatrix();
+  PointsRowMajor rest;
+  scene.renderVertices(0, rest);
+  ASSERT_EQ(size_t(rest.rows()), detail.vertices.size());
+  double worst = 0.0;
+  for (size_t v = 0; v < detail.vertices.size(); ++v)
+    worst = std::max(worst, (rest.row(Eigen::Index(v)).cast<double>().transpose() -
+                             (R * (1.5 * detail.vertices[v]) + Vec3(1, 2, 3)))
+                                .norm());
+  EXPECT_LT(worst, 1e-4);  // float particles and render vertices of a ~2-m body
+
+  const Eigen::MatrixX3d x = scene.world.positions(b.handle).cast<double>();
+  const Vec3 c = x.colwise().mean().transpose();
+  const Mat3 M = 0.8 * Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()).toRotationMatrix();
+  const Vec3 d(0.2, 0.5, -0.1);
+  Eigen::MatrixX3d y = x;
+  for (Eigen::Index i = 0; i < x.rows(); ++i)
+    y.row(i) = (M * (x.row(i).transpose() - c) + c + d).transpose();
+  scene.world.setState(b.handle, y, Eigen::MatrixX3d::Zero(x.rows(), 3));
+  PointsRowMajor moved;
+  scene.renderVertices(0, moved);
+  worst = 0.0;
+  for (Eigen::Index v = 0; v < rest.rows(); ++v)
+    worst = std::max(worst, (moved.row(v).cast<double>().transpose() -
+                             (M * (rest.row(v).cast<double>().transpose() - c) + c + d))
+                                .norm());
+  EXPECT_LT(worst, 1e-4);
 }
 
 // A lattice body: its particles are the lattice's nodes (x fastest), its surface the outer
@@ -493,11 +543,13 @@ TEST(Scene, LatticeErrorsNameTheField) {
 TEST(Scene, EmbeddingErrorsNameTheField) {
   const std::string render = R"(, "renderMesh": ")" + kAssets + R"(/meshes/suzanne.obj")";
   expectSceneError(body(render + R"(, "embedding": "nope")"),
-                   "bodies[0].embedding: must be mvc, harmonic or rbf, got 'nope'");
+                   "bodies[0].embedding: must be mvc, harmonic, rbf or green, got 'nope'");
   expectSceneError(body(render + R"(, "embedding": "ffd-bspline")"),
                    "bodies[0].embedding: 'ffd-bspline' is how a lattice body's render mesh");
-  expectSceneError(body(render + R"(, "embedding": "green")"),
-                   "bodies[0].embedding: 'green' needs the cage's face normals");
+  // Green coordinates are defined inside the cage only: the bunny sticks out of suzanne's.
+  expectSceneError(
+      body(R"(, "renderMesh": ")" + kAssets + R"(/meshes/bunny.obj", "embedding": "green")"),
+      "is outside the cage");
   expectSceneError(body(render + R"(, "embedding": 3)"),
                    "bodies[0].embedding: must be a method name or an object");
   expectSceneError(body(render + R"(, "embedding": {"shape": 1})"),
