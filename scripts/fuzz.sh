@@ -1,15 +1,17 @@
 #!/usr/bin/env bash
 # Fuzzes every reader of outside bytes with libFuzzer under AddressSanitizer + UBSan: the scene
 # parser, the OBJ/OFF/PLY/STL readers, the bind cache loader and the frame reader
-# (tests/fuzz/). Builds with clang into build/fuzz, writes seed corpora from the shipped assets,
-# then runs each target for SECONDS (default 60; CI uses its own budget, see .ci/run).
+# (tests/fuzz/). Uses the fuzz programs of the ASan test build (build/sanitize, made by
+# SOFTBODY_SANITIZE=1 scripts/test.sh, as CI's stage before this one) when it has them, else
+# builds them with clang into build/fuzz; writes seed corpora from the shipped assets, then runs
+# each target for SECONDS (default 60; CI uses its own budget, see .ci/run).
 #
 #   ./scripts/fuzz.sh [SECONDS] [TARGET...]
 #
-# The corpora grow in build/fuzz/corpus/<target>/ and are kept between runs, so a longer
+# The corpora grow in the build folder's corpus/<target>/ and are kept between runs, so a longer
 # maintainer run simply continues, e.g. an hour per target overnight:
 #   ./scripts/fuzz.sh 3600
-# A crash stops the run and leaves the input in build/fuzz/artifacts/; after fixing the cause,
+# A crash stops the run and leaves the input in the build folder's artifacts/; after fixing the cause,
 # copy it to tests/fuzz/regressions/<target>/ (every test build replays those inputs as the
 # CTest tests fuzz_regressions.<target>).
 set -euo pipefail
@@ -19,15 +21,19 @@ seconds=${1:-60}
 shift || true
 targets=("$@")
 [ ${#targets[@]} -eq 0 ] && targets=(scene mesh_obj mesh_off mesh_ply mesh_stl bind_cache frame)
-dir="$root/build/fuzz"
-cmake -S "$root" -B "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DCMAKE_CXX_COMPILER=clang++ -DSOFTBODY_FUZZ=ON -DSOFTBODY_SANITIZE=ON \
-  -DSOFTBODY_BUILD_TESTS=OFF -DSOFTBODY_BUILD_VIEWER=OFF >/dev/null
+dir="$root/build/sanitize"
+if ! grep -qx "SOFTBODY_FUZZ:BOOL=ON" "$dir/CMakeCache.txt" 2>/dev/null; then
+  dir="$root/build/fuzz"
+  cmake -S "$root" -B "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DCMAKE_CXX_COMPILER=clang++ -DSOFTBODY_FUZZ=ON -DSOFTBODY_SANITIZE=ON \
+    -DSOFTBODY_BUILD_TESTS=OFF -DSOFTBODY_BUILD_VIEWER=OFF >/dev/null
+fi
+echo "fuzz: programs of $dir"
 cmake --build "$dir" -j"$(nproc)" --target make_fuzz_seeds "${targets[@]/#/fuzz_}"
 export ASAN_OPTIONS="abort_on_error=1:detect_leaks=1"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 export LSAN_OPTIONS="suppressions=$root/scripts/lsan.supp:print_suppressions=0"
-seeds="$dir/seeds"
+seeds="$dir/fuzz-seeds"
 rm -rf "$seeds"
 "$dir/tests/fuzz/make_fuzz_seeds" "$seeds" >/dev/null
 mkdir -p "$dir/artifacts"
