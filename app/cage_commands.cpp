@@ -12,6 +12,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "app/command_line.h"
 #include "app/commands.h"
 #include "sim/base/parallel.h"
 #include "sim/cage/auto_cage.h"
@@ -28,21 +29,6 @@ namespace {
 using cage::BindOptions;
 using cage::Embedding;
 using mesh::TriangleMesh;
-
-// Parses argv with app; returns -1 to continue, else the exit code (help: 0, error: 2).
-int parse(CLI::App& app, int argc, char** argv) {
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp&) {
-    std::printf("%s", app.help().c_str());
-    return 0;
-  } catch (const CLI::ParseError& e) {
-    std::fprintf(stderr, "%s: %s\nRun '%s --help' for usage.\n", app.get_name().c_str(), e.what(),
-                 app.get_name().c_str());
-    return 2;
-  }
-  return -1;
-}
 
 BindOptions makeOptions(const std::string& cacheDir, int threads, const std::string& storage,
                         double prune, bool progress) {
@@ -128,7 +114,7 @@ int runBindCommand(int argc, char** argv) {
                  "Write the weight matrix (binary .sbw file, see sim/cage/README.md)");
   MethodArgs method;
   addCommonOptions(app, cacheDir, threads, storage, prune, method);
-  if (const int rc = parse(app, argc, argv); rc >= 0) return rc;
+  if (const int rc = parseArguments(app, argc, argv); rc >= 0) return rc;
 
   try {
     const TriangleMesh mesh = mesh::readMesh(meshPath);
@@ -199,7 +185,7 @@ int runDeformCommand(int argc, char** argv) {
   app.add_option("--out", outPath, "Output OBJ")->required();
   MethodArgs method;
   addCommonOptions(app, cacheDir, threads, storage, prune, method);
-  if (const int rc = parse(app, argc, argv); rc >= 0) return rc;
+  if (const int rc = parseArguments(app, argc, argv); rc >= 0) return rc;
 
   try {
     const TriangleMesh mesh = mesh::readMesh(meshPath);
@@ -264,7 +250,7 @@ int runCageCommand(int argc, char** argv) {
   app.add_option("--tightness", options.tightness,
                  "0 (fast, loose) to 1 (tight, slower): the voxel resolution of the first surface");
   app.add_option("--threads", options.threads, "Threads for the final checks (0 = all cores)");
-  if (const int rc = parse(app, argc, argv); rc >= 0) return rc;
+  if (const int rc = parseArguments(app, argc, argv); rc >= 0) return rc;
 
   try {
     const TriangleMesh mesh = mesh::readMesh(meshPath);

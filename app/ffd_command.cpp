@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "app/command_line.h"
 #include "app/commands.h"
 #include "sim/base/file_io.h"
 #include "sim/cage/ffd_lattice.h"
@@ -72,15 +73,7 @@ int runFfdCommand(int argc, char** argv) {
   app.add_flag("--de-boor", deBoor,
                "Evaluate with de Boor's algorithm per vertex instead of the precomputed weights "
                "(the same result)");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp&) {
-    std::printf("%s", app.help().c_str());
-    return 0;
-  } catch (const CLI::ParseError& e) {
-    std::fprintf(stderr, "ffd: %s\nRun 'softbody ffd --help' for usage.\n", e.what());
-    return 2;
-  }
+  if (const int rc = parseArguments(app, argc, argv); rc >= 0) return rc;
   if (!outPath.empty() && deformedPath.empty()) {
     std::fprintf(stderr, "ffd: --out needs --deformed-lattice (the moved lattice)\n");
     return 2;

@@ -29,11 +29,32 @@ FoldProbes mvcProbes(const mesh::TriangleMesh& cage, int target = 600) {
   });
 }
 
+// The winding number of a closed, outward triangle mesh about p: Σ solid angles / 4π (the Van
+// Oosterom–Strackee formula), 1 inside, 0 outside; computed here independently of the library.
+double windingNumber(const Vec3& p, const mesh::TriangleMesh& m) {
+  double sum = 0.0;
+  for (const auto& t : m.triangles) {
+    const Vec3 a = m.vertices[size_t(t[0])] - p, b = m.vertices[size_t(t[1])] - p,
+               c = m.vertices[size_t(t[2])] - p;
+    const double la = a.norm(), lb = b.norm(), lc = c.norm();
+    sum += 2.0 * std::atan2(a.dot(b.cross(c)),
+                            la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb);
+  }
+  return sum / (4.0 * M_PI);
+}
+
 TEST(FoldCheck, SamplesLieInsideWithTheirOffsets) {
-  const FoldSampling s = foldSamples(bunnyCage(), 600);
+  const auto& cage = bunnyCage();
+  const FoldSampling s = foldSamples(cage, 600);
   EXPECT_GE(s.samples.size(), 300u);
   EXPECT_LE(s.samples.size(), 3000u);
-  EXPECT_GT(s.step, 0.0);
+  ASSERT_GT(s.step, 0.0);
+  // Every sample and each of its three offsets (the points the probes bind) is inside the cage.
+  int outside = 0;
+  for (const Vec3& x : s.samples)
+    for (int d = -1; d < 3; ++d)
+      if (windingNumber(d < 0 ? x : Vec3(x + s.step * Vec3::Unit(d)), cage) < 0.5) ++outside;
+  EXPECT_EQ(outside, 0);
 }
 
 TEST(FoldCheck, AffineMotionsGiveTheirDeterminant) {
