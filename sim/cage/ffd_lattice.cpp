@@ -238,6 +238,28 @@ FfdNodes FfdLattice::restNodes() const {
   return P;
 }
 
+std::vector<std::vector<int>> FfdLattice::regions(int halfWidth) const {
+  validate();
+  if (halfWidth < 1)
+    throw std::invalid_argument("ffd: region half-width must be at least 1, got " +
+                                std::to_string(halfWidth));
+  std::vector<std::vector<int>> out;
+  out.reserve(size_t(nodeCount()));
+  for (int k = 0; k < nodes[2]; ++k)
+    for (int j = 0; j < nodes[1]; ++j)
+      for (int i = 0; i < nodes[0]; ++i) {
+        std::vector<int> region;
+        // k, j, i ascending with x fastest: the indices come out sorted.
+        for (int c = std::max(0, k - halfWidth); c <= std::min(nodes[2] - 1, k + halfWidth); ++c)
+          for (int b = std::max(0, j - halfWidth); b <= std::min(nodes[1] - 1, j + halfWidth); ++b)
+            for (int a = std::max(0, i - halfWidth); a <= std::min(nodes[0] - 1, i + halfWidth);
+                 ++a)
+              region.push_back(nodeIndex(a, b, c));
+        out.push_back(std::move(region));
+      }
+  return out;
+}
+
 std::vector<std::array<int, 3>> FfdLattice::boundaryTriangles() const {
   validate();
   std::vector<std::array<int, 3>> out;

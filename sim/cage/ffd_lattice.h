@@ -59,6 +59,11 @@ struct FfdLattice {
   // The outer layer of nodes as a closed surface, outward-oriented: two triangles per boundary
   // cell face, indices into the nodes (a lattice body's surface for contact).
   std::vector<std::array<int, 3>> boundaryTriangles() const;
+  // Lattice shape-matching regions (FastLSM, Rivers & James 2007): one region per node, the
+  // nodes within halfWidth index steps of it on every axis (a (2w+1)³ block, cut at the
+  // lattice's faces), as sorted node indices. Neighbouring regions overlap by all but one layer,
+  // which is what holds a clustered body together. halfWidth ≥ 1 (std::invalid_argument).
+  std::vector<std::vector<int>> regions(int halfWidth) const;
 };
 
 // A lattice whose box is the bounding box of the points grown by margin · (bounding box

@@ -183,7 +183,13 @@ Collider parseCollider(Fields& f) {
   return c;
 }
 
-ClusterDef parseClusters(Fields& f) {
+// Lattice region half-width in nodes (a region spans up to 2w + 1 nodes per axis).
+constexpr ParamRange kLatticeRegionHalfWidth{1, 16};
+
+// "clusters" of a body; `lattice` says whether it is a lattice body, which may also take
+// {"kind": "lattice", "halfWidth": w} (its regions are filled in once the lattice is made;
+// *regionHalfWidth receives w, else stays 0).
+ClusterDef parseClusters(Fields& f, bool lattice, int* regionHalfWidth) {
   ClusterDef d;
   const std::string single = "single";
   const std::string kind = f.text("kind", &single);
@@ -210,8 +216,12 @@ ClusterDef parseClusters(Fields& f) {
       }
       d.clusters.push_back(std::move(members));
     }
+  } else if (kind == "lattice") {
+    if (!lattice) f.fail("kind", "'lattice' regions need a lattice body (\"lattice\": {...})");
+    d.kind = ClusterDef::Kind::Explicit;  // the regions, once the lattice is made
+    *regionHalfWidth = f.integer("halfWidth", 1, kLatticeRegionHalfWidth);
   } else {
-    f.fail("kind", "must be single, grid or explicit, got '" + kind + "'");
+    f.fail("kind", "must be single, grid, explicit or lattice, got '" + kind + "'");
   }
   f.rejectUnknown();
   return d;
@@ -374,7 +384,7 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMe
   }
   if (f.has("clusters")) {
     Fields c(f.raw("clusters"), f.where("clusters"), f.file());
-    def.clusters = parseClusters(c);
+    def.clusters = parseClusters(c, sb.lattice.has_value(), &sb.latticeRegionHalfWidth);
   }
   if (f.has("interior")) {
     Fields in(f.raw("interior"), f.where("interior"), f.file());
@@ -417,6 +427,8 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMe
         mesh.vertices.push_back(nodes.row(n).transpose());
       mesh.triangles = lattice.boundaryTriangles();
       sb.latticeFrame = lattice;
+      if (sb.latticeRegionHalfWidth > 0)
+        def.clusters.clusters = lattice.regions(sb.latticeRegionHalfWidth);
     } catch (const std::exception& e) {
       f.fail("lattice", e.what());
     }
@@ -853,7 +865,12 @@ ordered_json bodyJson(const World& w, const SceneBody& b, const std::string& fro
   const ClusterDef& c = w.clusterDef(b.handle);
   ordered_json cj;
   cj["kind"] = clusterKindName(c.kind);
-  if (c.kind == ClusterDef::Kind::Grid) {
+  if (b.latticeFrame && b.latticeRegionHalfWidth > 0 && c.kind == ClusterDef::Kind::Explicit &&
+      c.clusters == b.latticeFrame->regions(b.latticeRegionHalfWidth)) {
+    // Still the lattice's regions (the viewer may have changed the clusters since).
+    cj["kind"] = "lattice";
+    cj["halfWidth"] = b.latticeRegionHalfWidth;
+  } else if (c.kind == ClusterDef::Kind::Grid) {
     cj["cellSize"] = c.cellSize;
     cj["overlap"] = c.overlap;
   } else if (c.kind == ClusterDef::Kind::Explicit) {

@@ -67,6 +67,10 @@ struct SceneBody {
   // With a lattice: the lattice in the render mesh file's coordinates (its nodes, placed like
   // every body's vertices, are the particles).
   std::optional<cage::FfdLattice> latticeFrame;
+  // "clusters": {"kind": "lattice", "halfWidth": w} on a lattice body: one cluster per node, the
+  // nodes within w steps of it (FfdLattice::regions, FastLSM's lattice shape matching), given
+  // to the World as explicit clusters; 0 for any other clusters.
+  int latticeRegionHalfWidth = 0;
   // "interior": {"spacing": s}: lattice particles s metres apart inside the cage follow its
   // vertices (sim/cage/interior_points.h); 0 = none. The particles are the cage's vertices
   // first, then the interior ones; the render mesh follows the first cageVertexCount.

@@ -516,6 +516,70 @@ TEST(Scene, LatticeBodyFromAMeshWithoutCage) {
   fs::remove_all(dir);
 }
 
+// "clusters": {"kind": "lattice"}: one cluster per node holding the nodes within halfWidth
+// index steps on every axis (checked against a pass over all node pairs); the body falls,
+// comes to rest on the floor without inflating or collapsing, and saves as lattice regions.
+TEST(Scene, LatticeRegionClusters) {
+  const std::string text = R"({"colliders": [{"type": "plane", "normal": [0, 1, 0], "offset": 0}],
+      "bodies": [{"name": "l", "renderMesh": ")" +
+                           kAssets + R"(/meshes/suzanne.obj",
+        "lattice": {"nodes": [5, 4, 4]}, "translation": [0, 1, 0], "scale": 0.3,
+        "alpha": 0.5, "clusters": {"kind": "lattice", "halfWidth": 1}}]})";
+  Scene scene = parseScene(text, "regions.json", "");
+  const SceneBody& b = scene.bodies[0];
+  ASSERT_TRUE(b.latticeFrame);
+  EXPECT_EQ(b.latticeRegionHalfWidth, 1);
+  const ClusterDef& def = scene.world.clusterDef(b.handle);
+  ASSERT_EQ(def.kind, ClusterDef::Kind::Explicit);
+  const std::array<int, 3> n{5, 4, 4};
+  ASSERT_EQ(def.clusters.size(), size_t(n[0] * n[1] * n[2]));
+  auto ijk = [&](int index) {
+    return std::array<int, 3>{index % n[0], (index / n[0]) % n[1], index / (n[0] * n[1])};
+  };
+  for (int c = 0; c < int(def.clusters.size()); ++c) {
+    std::vector<int> expected;
+    for (int m = 0; m < n[0] * n[1] * n[2]; ++m) {
+      int far = 0;
+      for (int a = 0; a < 3; ++a)
+        far = std::max(far, std::abs(ijk(c)[size_t(a)] - ijk(m)[size_t(a)]));
+      if (far <= 1) expected.push_back(m);
+    }
+    EXPECT_EQ(def.clusters[size_t(c)], expected) << "region of node " << c;
+  }
+  EXPECT_EQ(def.clusters[0].size(), 8u);                             // a corner
+  EXPECT_EQ(def.clusters[size_t(1 + 5 * (1 + 4 * 1))].size(), 27u);  // inside
+
+  auto extent = [&] {
+    const Eigen::MatrixX3d x = scene.world.positions(b.handle).cast<double>();
+    return Vec3(x.colwise().maxCoeff() - x.colwise().minCoeff());
+  };
+  const Vec3 restExtent = extent();
+  for (int s = 0; s < 240 * 6; ++s) scene.world.step(1.0 / 240);  // 6 s: fallen and settled
+  double fastest = 0.0;
+  for (Eigen::Index i = 0; i < scene.world.velocities(b.handle).rows(); ++i)
+    fastest = std::max(fastest, double(scene.world.velocities(b.handle).row(i).norm()));
+  EXPECT_LT(fastest, 0.01);
+  PointsRowMajor rendered;
+  scene.renderVertices(0, rendered);
+  EXPECT_GT(rendered.col(1).minCoeff(), -0.002);
+  const Vec3 restingExtent = extent();
+  for (int a = 0; a < 3; ++a)
+    EXPECT_NEAR(restingExtent[a] / restExtent[a], 1.0, 0.05) << "axis " << a;
+
+  const fs::path dir = fs::temp_directory_path() / "softbody_lattice_regions";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  saveScene(scene, (dir / "saved.json").string());
+  const std::string saved = [&] {
+    std::ifstream in(dir / "saved.json");
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  }();
+  EXPECT_NE(saved.find("\"kind\": \"lattice\""), std::string::npos) << saved;
+  const Scene back = loadScene((dir / "saved.json").string());
+  EXPECT_EQ(back.world.clusterDef(back.bodies[0].handle).clusters, def.clusters);
+  fs::remove_all(dir);
+}
+
 TEST(Scene, LatticeErrorsNameTheField) {
   const std::string suzanne = kAssets + "/meshes/suzanne.obj";
   auto with = [&](const std::string& fields) {
@@ -534,6 +598,12 @@ TEST(Scene, LatticeErrorsNameTheField) {
                    "bodies[0].lattice.basis: must be bspline or bernstein, got 'nurbs'");
   expectSceneError(with(render + R"("lattice": {"nodes": [3, 4, 4], "basis": "bspline"})"),
                    "bodies[0].lattice: nodes: 3 on axis x");
+  expectSceneError(
+      with(render + R"("lattice": {}, "clusters": {"kind": "lattice", "halfWidth": 0})"),
+      "bodies[0].clusters.halfWidth: must be in [1, 16], got 0");
+  expectSceneError(R"({"bodies": [{"name": "b", "mesh": ")" + suzanne +
+                       R"(", "clusters": {"kind": "lattice"}}]})",
+                   "bodies[0].clusters.kind: 'lattice' regions need a lattice body");
   expectSceneError(with(render + R"("lattice": {"margin": 2})"),
                    "bodies[0].lattice.margin: must be in [0, 1], got 2");
   expectSceneError(with(render + R"("lattice": {}, "embedding": "rbf")"),
