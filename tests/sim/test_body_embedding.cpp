@@ -1,4 +1,5 @@
-// Switching a body's embedding in a running scene (sim/scene/body_embedding.h).
+// Switching a body's embedding in a running scene (sim/scene/body_embedding.h) and watching it
+// for folds afterwards (sim/scene/fold_watch.h).
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -6,6 +7,7 @@
 #include <string>
 
 #include "sim/scene/body_embedding.h"
+#include "sim/scene/fold_watch.h"
 #include "sim/scene/scene.h"
 
 namespace sb {
@@ -103,6 +105,61 @@ TEST(BodyEmbedding, RefusalKeepsTheOldBinding) {
   // A lattice body's mesh follows its nodes; an index outside the scene is refused.
   EXPECT_THROW(rebindRenderMesh(scene, 2, harmonic(8)), std::invalid_argument);
   EXPECT_THROW(rebindRenderMesh(scene, 3, harmonic(8)), std::out_of_range);
+}
+
+// Mirror body `body` through its centre (turns its map inside out: every sample folds).
+void mirror(Scene& scene, int body) {
+  const BodyHandle h = scene.bodies[size_t(body)].handle;
+  const Eigen::MatrixX3d x = scene.world.positions(h).cast<double>();
+  const Vec3 c = x.colwise().mean().transpose();
+  Eigen::MatrixX3d y = x;
+  for (Eigen::Index i = 0; i < x.rows(); ++i)
+    y.row(i) = (Vec3(-1, 1, 1).asDiagonal() * (x.row(i).transpose() - c) + c).transpose();
+  scene.world.setState(h, y, Eigen::MatrixX3d::Zero(x.rows(), 3));
+}
+
+// foldedRegions reports what folded() does, with a point per folded sample inside the body;
+// a watch in the start pose made after the body folded still sees the fold; rewatch follows a
+// switched method.
+TEST(BodyEmbedding, FoldRegionsAndRewatchAfterASwitch) {
+  Scene scene = twoSuzannes();
+  FoldWatch watch(scene, 200);
+  EXPECT_TRUE(watch.foldedRegions(scene).empty());
+  mirror(scene, 1);
+  const std::vector<FoldWatch::BodyFolds> folds = watch.folded(scene);
+  const std::vector<FoldWatch::FoldedRegion> regions = watch.foldedRegions(scene);
+  ASSERT_EQ(folds.size(), 1u);
+  ASSERT_EQ(regions.size(), 1u);
+  EXPECT_EQ(regions[0].body, 1);
+  EXPECT_EQ(regions[0].report.folded, folds[0].report.folded);
+  EXPECT_EQ(static_cast<int>(regions[0].points.size()), regions[0].report.folded);
+  EXPECT_GT(regions[0].spacing, 0.0);
+  const ConstPointsRef x = scene.world.positions(scene.bodies[1].handle);
+  const Eigen::RowVector3f lo = x.colwise().minCoeff(), hi = x.colwise().maxCoeff();
+  for (const Vec3& p : regions[0].points)
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_GE(p[a], lo[a] - 1e-6);
+      EXPECT_LE(p[a], hi[a] + 1e-6);
+    }
+
+  FoldWatch fromStart(scene, 200, FoldWatch::Pose::Start);
+  const std::vector<FoldWatch::FoldedRegion> startRegions = fromStart.foldedRegions(scene);
+  ASSERT_EQ(startRegions.size(), 1u);
+  EXPECT_EQ(startRegions[0].body, 1);
+  EXPECT_EQ(startRegions[0].report.folded, startRegions[0].report.samples);
+
+  // After a switch, the body's samples are bound with the new method (an RBF map of the mirror
+  // folds too); the other bodies' watches are kept. (In the start pose: the mirrored cage, turned
+  // inward, is no pose to sample in.)
+  cage::EmbeddingMethod rbf;
+  rbf.kind = cage::EmbeddingKind::Rbf;
+  rebindRenderMesh(scene, 1, rbf);
+  fromStart.rewatch(scene, 1);
+  EXPECT_EQ(fromStart.watchedBodies(), 3);
+  const std::vector<FoldWatch::FoldedRegion> after = fromStart.foldedRegions(scene);
+  ASSERT_EQ(after.size(), 1u);
+  EXPECT_EQ(after[0].body, 1);
+  EXPECT_EQ(after[0].report.folded, after[0].report.samples);
 }
 
 }  // namespace
