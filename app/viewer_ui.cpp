@@ -109,6 +109,7 @@ void ViewerApp::drawPanel() {
   ImGui::SameLine();
   // Taken after this frame is drawn (the back buffer holds nothing useful yet).
   if (ImGui::Button("Screenshot")) screenshotRequest_ = screenshotPathInput_;
+  recordWidget("screenshot");
   tooltip("Write the current frame (with this panel) as a PNG to the path set under Scene file.");
 
   ImGui::Text("t = %.2f s   frame %ld   %.0f fps", scene_.world.time(), frame_,
@@ -119,6 +120,7 @@ void ViewerApp::drawPanel() {
   if (sceneOpen) drawScenePanel();
   if (ImGui::CollapsingHeader("World", ImGuiTreeNodeFlags_DefaultOpen)) drawWorldPanel();
   if (ImGui::CollapsingHeader("Bodies", ImGuiTreeNodeFlags_DefaultOpen)) {
+    drawFoldControls();
     for (std::size_t i = 0; i < scene_.bodies.size(); ++i) drawBodyPanel(static_cast<int>(i));
   }
   if (ImGui::CollapsingHeader("Overlays", ImGuiTreeNodeFlags_DefaultOpen)) {
@@ -302,6 +304,7 @@ void ViewerApp::drawBodyPanel(int body) {
   const bool open =
       ImGui::TreeNodeEx(world.name(h).c_str(), body == 0 ? ImGuiTreeNodeFlags_DefaultOpen : 0);
   tooltip("Parameters of this body (its colour in the view on the left).");
+  drawBodyFoldWarning(body);
   if (open) {
     const BodyParams before = world.params(h);
     BodyParams p = before;
@@ -420,6 +423,7 @@ void ViewerApp::drawBodyPanel(int body) {
       }
     }
     ImGui::Text("%d particles, %d clusters", world.particleCount(h), world.clusterCount(h));
+    drawEmbeddingControls(body);
     drawBodyKineticPlot(body);
     if (ImGui::SmallButton("duplicate")) duplicateRequest_ = body;
     recordWidget(("duplicate" + std::to_string(body)).c_str());
