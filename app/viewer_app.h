@@ -181,10 +181,12 @@ class ViewerApp {
   void applyEmbeddingRequest();
 
   // ---- viewer_folds.cpp ----
-  // The toggle with a one-line summary (top of the Bodies section), and a folded body's
-  // warning on its name's line: warnings never push the panel's controls down.
+  // The toggle (on the panel's time line), a folded body's warning on its name's line, and the
+  // folded bodies in the status bar: warnings never push the panel's controls down.
   void drawFoldControls();
   void drawBodyFoldWarning(int body);
+  void drawFoldStatus();
+  bool foldStatusShown() const;  // drawFoldStatus draws something
   // Every kFoldCheckEvery frames while on: checks each watched body and recomputes the tint.
   void updateFoldCheck();
   void clearFolds();  // forgets the watch (bodies changed) and the tint

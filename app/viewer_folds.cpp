@@ -32,7 +32,7 @@ const glm::vec4 kFoldColour(1.0f, 0.1f, 0.85f, 0.85f);  // magenta: no body colo
 }  // namespace
 
 void ViewerApp::drawFoldControls() {
-  if (ImGui::Checkbox("fold check", &foldCheck_)) {
+  if (ImGui::Checkbox("folds", &foldCheck_)) {
     // Off: the watch goes too (no rebinding its samples on a switch); on: made afresh.
     clearFolds();
     if (!foldCheck_)
@@ -41,26 +41,33 @@ void ViewerApp::drawFoldControls() {
   recordWidget("foldCheck");
   if (ImGui::IsItemHovered())
     ImGui::SetTooltip(
-        "Check every %d frames whether a body's render mesh passes through itself: det J <= 0\n"
-        "at samples inside its cage or lattice (relative to its start). Folded bodies are named\n"
-        "here and on their line below; their folded regions are tinted magenta.",
+        "Fold check: every %d frames, whether a body's render mesh passes through itself\n"
+        "(det J <= 0 at samples inside its cage or lattice, relative to its start). Folded\n"
+        "bodies are named in the bar below the view and on their line in Bodies; their folded\n"
+        "regions are tinted magenta.",
         kFoldCheckEvery);
+}
+
+bool ViewerApp::foldStatusShown() const {
+  return foldCheck_ && (!folds_.empty() || !foldError_.empty());
+}
+
+void ViewerApp::drawFoldStatus() {
   if (!foldCheck_) return;
-  ImGui::SameLine();
   if (!foldError_.empty()) {
-    ImGui::TextColored(ImVec4(1.0f, 0.4f, 0.35f, 1.0f), "stopped (hover for why)");
-    if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", foldError_.c_str());
-  } else if (folds_.empty()) {
-    ImGui::TextDisabled("no folds (%d bodies watched)",
-                        foldWatch_ ? foldWatch_->watchedBodies() : 0);
-  } else {
-    std::string names;
-    for (const FoldWatch::FoldedRegion& f : folds_)
-      names += (names.empty() ? "" : ", ") +
-               scene_.world.name(scene_.bodies[static_cast<std::size_t>(f.body)].handle);
-    ImGui::TextColored(ImVec4(1.0f, 0.35f, 0.85f, 1.0f), "FOLDED: %s", names.c_str());
-    recordWidget("foldWarning");
-    if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", names.c_str());
+    ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1.0f, 0.4f, 0.35f, 1.0f));
+    ImGui::TextWrapped("%s", foldError_.c_str());
+    ImGui::PopStyleColor();
+    return;
+  }
+  for (const FoldWatch::FoldedRegion& f : folds_) {
+    const std::string name =
+        scene_.world.name(scene_.bodies[static_cast<std::size_t>(f.body)].handle);
+    ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1.0f, 0.35f, 0.85f, 1.0f));
+    ImGui::TextWrapped("FOLD: %s: %d of %d samples folded (smallest det J %.3f)", name.c_str(),
+                       f.report.folded, f.report.samples, f.report.minDeterminant);
+    ImGui::PopStyleColor();
+    recordWidget(("foldStatus" + std::to_string(f.body)).c_str());
   }
 }
 

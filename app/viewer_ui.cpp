@@ -114,13 +114,14 @@ void ViewerApp::drawPanel() {
 
   ImGui::Text("t = %.2f s   frame %ld   %.0f fps", scene_.world.time(), frame_,
               ImGui::GetIO().Framerate);
+  ImGui::SameLine();
+  drawFoldControls();  // on this line: a line more would push the body controls off the window
 
   const bool sceneOpen = ImGui::CollapsingHeader("Scene file");
   recordWidget("sceneHeader");
   if (sceneOpen) drawScenePanel();
   if (ImGui::CollapsingHeader("World", ImGuiTreeNodeFlags_DefaultOpen)) drawWorldPanel();
   if (ImGui::CollapsingHeader("Bodies", ImGuiTreeNodeFlags_DefaultOpen)) {
-    drawFoldControls();
     for (std::size_t i = 0; i < scene_.bodies.size(); ++i) drawBodyPanel(static_cast<int>(i));
   }
   if (ImGui::CollapsingHeader("Overlays", ImGuiTreeNodeFlags_DefaultOpen)) {
@@ -198,11 +199,12 @@ void ViewerApp::drawStatusBar() {
       ImGui::EndPopup();
     }
   }
+  drawFoldStatus();
   if (!statusMessage_.empty()) {
     ImGui::PushStyleColor(ImGuiCol_Text, ImGui::GetStyleColorVec4(ImGuiCol_TextDisabled));
     ImGui::TextWrapped("%s", statusMessage_.c_str());
     ImGui::PopStyleColor();
-  } else if (errorMessage_.empty() && eventLog_.empty()) {
+  } else if (errorMessage_.empty() && eventLog_.empty() && !foldStatusShown()) {
     ImGui::PushStyleColor(ImGuiCol_Text, ImGui::GetStyleColorVec4(ImGuiCol_TextDisabled));
     ImGui::TextWrapped(
         "Left drag: pull a body (Ctrl: one particle). Right drag: orbit. Wheel: zoom. "

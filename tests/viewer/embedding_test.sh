@@ -117,7 +117,9 @@ next_frames "$live" 10
 [ "$(get /foldCheck/folded/0/body)" = 1 ] || fail "the first folded body is not body 1: $(get /foldCheck)"
 [ "$(get /bodies/0/foldedSamples)" = 0 ] || fail "body 0 (at rest) reported as folded"
 [ "$(get /foldCheck/folded/0/tintedVertices)" -gt 0 ] || fail "no render vertex tinted on body 1"
-[ -n "$("$CHECK" click-point "$live" foldWarning1)" ] || fail "no fold warning in the panel for body 1"
+[ -n "$("$CHECK" click-point "$live" foldWarning1)" ] || fail "no fold warning on body 1's line in the panel"
+[ -n "$("$CHECK" click-point "$live" foldStatus1)" ] || fail "no fold warning for body 1 in the status bar"
+[ "$("$CHECK" get "$live" /widgets/foldStatus0 2>/dev/null)" = "" ] || fail "a fold warning for body 0 (at rest)"
 echo "fold check: $(get /bodies/1/foldedSamples) of $(get /foldCheck/folded/0/samples) samples of body 1 folded, $(get /foldCheck/folded/0/tintedVertices) vertices tinted"
 screenshot "$WORK/folds"
 "$CHECK" tinted "$WORK/folds.png" "$WORK/folds.json" 1 300 >/dev/null ||
