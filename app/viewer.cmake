@@ -13,6 +13,8 @@ if(SOFTBODY_BUILD_VIEWER)
     ${CMAKE_CURRENT_LIST_DIR}/viewer_plots.cpp
     ${CMAKE_CURRENT_LIST_DIR}/viewer_ui.cpp
     ${CMAKE_CURRENT_LIST_DIR}/viewer_stats.cpp
+    ${CMAKE_CURRENT_LIST_DIR}/viewer_embedding.cpp
+    ${CMAKE_CURRENT_LIST_DIR}/viewer_folds.cpp
   )
   target_compile_definitions(softbody PRIVATE SOFTBODY_HAVE_VIEWER=1)
   target_link_libraries(softbody PRIVATE softbody_render glfw PkgConfig::IMGUI PkgConfig::STB)

@@ -86,6 +86,7 @@ ViewerApp::ViewerApp(const ViewerOptions& options, Scene scene)
   showCage_ = show.find(",cage,") != std::string::npos;
   showClusters_ = show.find(",clusters,") != std::string::npos;
   showGoals_ = show.find(",goals,") != std::string::npos;
+  foldCheck_ = show.find(",folds,") != std::string::npos;
   scenePathInput_ = scene_.path;
   savePathInput_ = savePathFor(scene_.path);
   savedText_ = sceneText(scene_, scene_.path);
@@ -159,6 +160,9 @@ bool ViewerApp::open(std::string* error) {
 }
 
 void ViewerApp::rebuildBodyViews() {
+  // Body indices may have changed: the fold watch and a pending switch refer to the old ones.
+  clearFolds();
+  embeddingRequest_ = EmbeddingRequest{};
   views_.clear();
   views_.resize(scene_.bodies.size());
   for (std::size_t i = 0; i < views_.size(); ++i) {
@@ -178,6 +182,7 @@ void ViewerApp::rebuildBodyViews() {
     for (const auto& e : mesh::buildSurfaceTopology(body.cageTriangles, particles).edges)
       v.cageEdges.push_back({e[0], e[1]});
     refreshClusters(static_cast<int>(i));
+    syncEmbeddingEdits(static_cast<int>(i));
   }
 }
 
@@ -267,6 +272,7 @@ void ViewerApp::resetSimulation() {
   collectEvents();
   for (std::size_t i = 0; i < views_.size(); ++i) refreshClusters(static_cast<int>(i));
   clearPlots();
+  lastFoldCheck_ = -1;
   statusMessage_ = "reset";
 }
 
@@ -447,6 +453,7 @@ void ViewerApp::renderFrame() {
     if (!options_.hideBodies) meshRenderer_->draw(*v.mesh, v.colour);
   }
   glDisable(GL_CULL_FACE);
+  drawFoldTint();
   if (showColliders_) drawColliders(*debugDraw_);
   debugDraw_->flush(viewProjection, 1.0f, true);
   drawOverlays(*debugDraw_);
@@ -578,6 +585,8 @@ int ViewerApp::run() {
     // The body buttons act after the panel is drawn (the panel walks the bodies).
     if (removeRequest_ >= 0) removeBody(std::exchange(removeRequest_, -1));
     if (duplicateRequest_ >= 0) duplicateBody(std::exchange(duplicateRequest_, -1));
+    // A switch asked for in an earlier frame: that frame showed "binding ..." (this blocks).
+    if (embeddingRequest_.body >= 0 && embeddingRequest_.frame < frame_) applyEmbeddingRequest();
 
     const Clock::time_point simStart = Clock::now();
     const bool stepping = !paused_ || stepOnce_;
@@ -589,6 +598,7 @@ int ViewerApp::run() {
 
     const Clock::time_point deformStart = Clock::now();
     updateMeshes();
+    updateFoldCheck();
     timings_.lastDeform = millisecondsSince(deformStart);
 
     const Clock::time_point renderStart = Clock::now();

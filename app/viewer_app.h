@@ -3,7 +3,8 @@
 //
 // The class is split over files by concern: viewer_app.cpp (window, frame loop, drawing),
 // viewer_input.cpp (mouse, keyboard, camera, dragging), viewer_ui.cpp (ImGui panel),
-// viewer_stats.cpp (the --stats JSON file).
+// viewer_stats.cpp (the --stats JSON file), viewer_embedding.cpp (switching a body's
+// embedding), viewer_folds.cpp (the fold check and its tint).
 #pragma once
 
 #include <array>
@@ -21,6 +22,7 @@
 #include "app/plot_history.h"
 #include "app/viewer_options.h"
 #include "render/orbit_camera.h"
+#include "sim/scene/fold_watch.h"
 #include "sim/scene/scene.h"
 
 struct GLFWwindow;
@@ -49,6 +51,17 @@ struct BodyView {
   // deform nor upload is redone until it wakes.
   bool currentWhileAsleep = false;
   bool uploaded = false;  // the GPU buffer holds these vertices and normals
+  // The embedding controls' values being edited (viewer_embedding.cpp): set from the body's
+  // method whenever it changes or a switch is refused.
+  int editResolution = 32;
+  float editShape = 1.0f;
+  std::string embeddingError;  // the last refused switch, shown under the control
+  // Fold tint (viewer_folds.cpp): triangles touching a render vertex near a folded sample,
+  // drawn again over the body in the fold colour.
+  std::vector<std::int32_t> tintTriangles;  // #T×3 flat
+  int tintedVertices = 0;
+  std::unique_ptr<render::MeshBuffer> tint;
+  bool tintUploaded = false;
 };
 
 // Rolling timing figures, milliseconds.
@@ -160,6 +173,26 @@ class ViewerApp {
   void drawTimingPanel();
   void drawScenePanel();
 
+  // ---- viewer_embedding.cpp ----
+  // The body's embedding combo and option sliders (cage bodies with a render mesh).
+  void drawEmbeddingControls(int body);
+  void syncEmbeddingEdits(int body);  // the edit values from the body's method
+  // Binds a pending switch (a frame after it was asked for, so the panel showed "binding...").
+  void applyEmbeddingRequest();
+
+  // ---- viewer_folds.cpp ----
+  // The toggle (on the panel's time line), a folded body's warning on its name's line, and the
+  // folded bodies in the status bar: warnings never push the panel's controls down.
+  void drawFoldControls();
+  void drawBodyFoldWarning(int body);
+  void drawFoldStatus();
+  bool foldStatusShown() const;  // drawFoldStatus draws something
+  // Every kFoldCheckEvery frames while on: checks each watched body and recomputes the tint.
+  void updateFoldCheck();
+  void clearFolds();  // forgets the watch (bodies changed) and the tint
+  void updateFoldTint(int body, const FoldWatch::FoldedRegion* region);
+  void drawFoldTint();  // in renderFrame, after the bodies
+
   // ---- viewer_stats.cpp ----
   // Writes the stats file (atomically); false, with the reason on stderr, when it cannot.
   bool writeStats(const std::string& path) const;
@@ -242,6 +275,20 @@ class ViewerApp {
   bool outputFailed_ = false;
   long statsWrites_ = 0;
   double statsMsSum_ = 0.0;
+
+  // A switch of a body's embedding asked for in the panel, bound at the start of a later frame.
+  struct EmbeddingRequest {
+    int body = -1;  // -1: none
+    cage::EmbeddingMethod method;
+    long frame = 0;  // the frame it was asked in
+  } embeddingRequest_;
+  // The fold check (viewer_folds.cpp): on/off, the watch (made when first needed, in the
+  // bodies' start pose), the folded bodies of the last check, and why the check stopped.
+  bool foldCheck_ = false;
+  std::unique_ptr<FoldWatch> foldWatch_;
+  std::vector<FoldWatch::FoldedRegion> folds_;
+  std::string foldError_;
+  long lastFoldCheck_ = -1;
 
   FrameTimings timings_;
   // Window-pixel rectangles (x0, y0, x1, y1) of named panel controls in the last frame, written

@@ -71,15 +71,17 @@ int runViewerCommand(int argc, char** argv) {
          "--sim-threads", options.simThreads,
          "simulation threads (0: all cores); 1 by default, as llvmpipe renders on the same cores")
       ->check(CLI::NonNegativeNumber);
-  cli.add_option("--show", options.show,
-                 "overlays to switch on, comma separated: particles,cage,clusters,goals")
+  cli.add_option(
+         "--show", options.show,
+         "overlays to switch on, comma separated: particles,cage,clusters,goals,folds (the fold "
+         "check)")
       ->check([](const std::string& text) {
         std::string rest = text + ",";
         for (std::size_t at; (at = rest.find(',')) != std::string::npos; rest.erase(0, at + 1)) {
           const std::string item = rest.substr(0, at);
           if (!item.empty() && item != "particles" && item != "cage" && item != "clusters" &&
-              item != "goals")
-            return "unknown overlay '" + item + "' (particles, cage, clusters, goals)";
+              item != "goals" && item != "folds")
+            return "unknown overlay '" + item + "' (particles, cage, clusters, goals, folds)";
         }
         return std::string();
       });

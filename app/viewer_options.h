@@ -18,7 +18,7 @@ struct ViewerOptions {
   bool startPaused = false;  // start with the simulation paused
   bool hideBodies = false;   // draw everything but the body meshes (tests compare against it)
   bool hideUi = false;       // no ImGui panel
-  std::string show;          // overlays on at start: comma list of particles,cage,clusters,goals
+  std::string show;  // overlays on at start: comma list of particles,cage,clusters,goals,folds
   // Simulation threads (0: all cores). One by default: llvmpipe renders on the
   // same cores, and spinning OpenMP workers competing with it cost more than they give for
   // scenes of a few hundred particles.

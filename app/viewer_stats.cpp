@@ -55,6 +55,20 @@ bool ViewerApp::writeStats(const std::string& path) const {
   j["savePath"] = savePathInput_;
   j["quitDialog"] = quitDialog_;
   j["bodyCount"] = scene_.bodies.size();
+  j["binding"] = embeddingRequest_.body >= 0;
+  json folded = json::array();
+  for (const FoldWatch::FoldedRegion& f : folds_)
+    folded.push_back(
+        {{"body", f.body},
+         {"folded", f.report.folded},
+         {"samples", f.report.samples},
+         {"minDeterminant", f.report.minDeterminant},
+         {"tintedVertices", views_[static_cast<std::size_t>(f.body)].tintedVertices},
+         {"tintedTriangles", views_[static_cast<std::size_t>(f.body)].tintTriangles.size() / 3}});
+  j["foldCheck"] = {{"enabled", foldCheck_},
+                    {"watched", foldWatch_ ? foldWatch_->watchedBodies() : 0},
+                    {"error", foldError_},
+                    {"folded", folded}};
   j["paramUndo"] = paramUndo_.size();
   j["plots"] = {{"samples", plots_.kinetic.count()},
                 {"kinetic", plots_.kinetic.last()},
@@ -172,6 +186,26 @@ bool ViewerApp::writeStats(const std::string& path) const {
     b["name"] = scene_.world.name(handle);
     const BodyParams& params = scene_.world.params(handle);
     b["params"] = {{"alpha", params.alpha}, {"beta", params.beta}};
+    // How the render mesh follows the particles: a cage method with its options, a lattice, or
+    // none (the body draws its particles).
+    const SceneBody& sceneBody = scene_.bodies[i];
+    const cage::EmbeddingMethod& method = sceneBody.embedding;
+    json embedding = {{"method", !sceneBody.render        ? "none"
+                                 : sceneBody.latticeFrame ? "lattice"
+                                                          : cage::embeddingKindName(method.kind)}};
+    if (sceneBody.render && !sceneBody.latticeFrame) {
+      if (method.kind == cage::EmbeddingKind::Harmonic)
+        embedding["resolution"] = method.harmonic.resolution;
+      if (method.kind == cage::EmbeddingKind::Rbf) embedding["shape"] = method.rbf.shape;
+      // The weights in use, to tell a half-switched body (none: both change together).
+      embedding["boundKind"] = cage::embeddingKindName(sceneBody.render->embedding->kind());
+    }
+    embedding["error"] = views_[i].embeddingError;
+    b["embedding"] = embedding;
+    int foldedSamples = 0;
+    for (const FoldWatch::FoldedRegion& f : folds_)
+      if (f.body == static_cast<int>(i)) foldedSamples = f.report.folded;
+    b["foldedSamples"] = foldedSamples;
     b["centre"] = {c.x(), c.y(), c.z()};
     const ScreenBox& box = pick[i].meshBox;
     b["screenBounds"] = {box.lo.x, box.lo.y, box.hi.x, box.hi.y};

@@ -109,10 +109,13 @@ void ViewerApp::drawPanel() {
   ImGui::SameLine();
   // Taken after this frame is drawn (the back buffer holds nothing useful yet).
   if (ImGui::Button("Screenshot")) screenshotRequest_ = screenshotPathInput_;
+  recordWidget("screenshot");
   tooltip("Write the current frame (with this panel) as a PNG to the path set under Scene file.");
 
   ImGui::Text("t = %.2f s   frame %ld   %.0f fps", scene_.world.time(), frame_,
               ImGui::GetIO().Framerate);
+  ImGui::SameLine();
+  drawFoldControls();  // on this line: a line more would push the body controls off the window
 
   const bool sceneOpen = ImGui::CollapsingHeader("Scene file");
   recordWidget("sceneHeader");
@@ -196,11 +199,12 @@ void ViewerApp::drawStatusBar() {
       ImGui::EndPopup();
     }
   }
+  drawFoldStatus();
   if (!statusMessage_.empty()) {
     ImGui::PushStyleColor(ImGuiCol_Text, ImGui::GetStyleColorVec4(ImGuiCol_TextDisabled));
     ImGui::TextWrapped("%s", statusMessage_.c_str());
     ImGui::PopStyleColor();
-  } else if (errorMessage_.empty() && eventLog_.empty()) {
+  } else if (errorMessage_.empty() && eventLog_.empty() && !foldStatusShown()) {
     ImGui::PushStyleColor(ImGuiCol_Text, ImGui::GetStyleColorVec4(ImGuiCol_TextDisabled));
     ImGui::TextWrapped(
         "Left drag: pull a body (Ctrl: one particle). Right drag: orbit. Wheel: zoom. "
@@ -302,6 +306,7 @@ void ViewerApp::drawBodyPanel(int body) {
   const bool open =
       ImGui::TreeNodeEx(world.name(h).c_str(), body == 0 ? ImGuiTreeNodeFlags_DefaultOpen : 0);
   tooltip("Parameters of this body (its colour in the view on the left).");
+  drawBodyFoldWarning(body);
   if (open) {
     const BodyParams before = world.params(h);
     BodyParams p = before;
@@ -420,6 +425,7 @@ void ViewerApp::drawBodyPanel(int body) {
       }
     }
     ImGui::Text("%d particles, %d clusters", world.particleCount(h), world.clusterCount(h));
+    drawEmbeddingControls(body);
     drawBodyKineticPlot(body);
     if (ImGui::SmallButton("duplicate")) duplicateRequest_ = body;
     recordWidget(("duplicate" + std::to_string(body)).c_str());

@@ -13,6 +13,10 @@
 //       a line is drawn across the plot WIDGET: most pixel columns of its frame (the left half of
 //       the recorded rectangle; the label is on the right) that the overlay text does not cross
 //       hold a pixel of ImGui's plot-line grey, and at least 40 columns are so counted
+//   viewer_check tinted SHOT.png STATS BODY MIN_PIXELS
+//       prints how many pixels in BODY's screen bounds have the fold tint's magenta (red and blue
+//       both well above green, which no body colour, the ground or the panel has); the check
+//       holds when there are at least MIN_PIXELS
 // Exit code 0 = the check holds, 1 = it does not, 2 = bad input.
 #include <algorithm>
 #include <cmath>
@@ -195,6 +199,27 @@ int plotted(const std::string& shotPath, const std::string& statsPath, const std
   return columns >= 40 && share >= 0.6 ? 0 : 1;
 }
 
+int tinted(const std::string& shotPath, const std::string& statsPath, int body, long minPixels) {
+  const Image shot(shotPath);
+  const json stats = readJson(statsPath);
+  const json& bounds = stats.at("bodies").at(body).at("screenBounds");
+  const int x0 = std::max(0, static_cast<int>(std::floor(bounds[0].get<double>())));
+  const int y0 = std::max(0, static_cast<int>(std::floor(bounds[1].get<double>())));
+  const int x1 = std::min(shot.width - 1, static_cast<int>(std::ceil(bounds[2].get<double>())));
+  const int y1 = std::min(shot.height - 1, static_cast<int>(std::ceil(bounds[3].get<double>())));
+  long count = 0;
+  for (int y = y0; y <= y1; ++y)
+    for (int x = x0; x <= x1; ++x) {
+      const unsigned char* p = shot.at(x, y);
+      // Magenta, shaded: red and blue both at least twice green, and not dark.
+      if (p[0] > 90 && p[2] > 70 && p[0] >= 2 * p[1] && p[2] >= 2 * p[1]) ++count;
+    }
+  std::printf("%ld\n", count);
+  std::fprintf(stderr, "body %d: %ld magenta pixels in [%d,%d]-[%d,%d]\n", body, count, x0, y0, x1,
+               y1);
+  return count >= minPixels ? 0 : 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -233,6 +258,8 @@ int main(int argc, char** argv) {
       return moved(argv[2], argv[3], std::stoi(argv[4]), std::stod(argv[5]));
     if (command == "still" && argc == 4) return still(argv[2], argv[3]);
     if (command == "plotted" && argc == 5) return plotted(argv[2], argv[3], argv[4]);
+    if (command == "tinted" && argc == 6)
+      return tinted(argv[2], argv[3], std::stoi(argv[4]), std::stol(argv[5]));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "viewer_check: %s\n", e.what());
     return 2;
