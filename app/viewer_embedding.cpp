@@ -23,9 +23,9 @@ namespace sb::app {
 
 namespace {
 
-// The methods a scene offers for a cage body, in the combo's order. Green coordinates are
-// offered although the cage library may refuse them (until scenes feed them face frames): the
-// refusal is shown and the old binding kept.
+// The methods a scene offers for a cage body, in the combo's order. A refused bind (Green
+// coordinates for a render mesh that sticks out of its cage, an option out of range) is shown
+// and the old binding kept.
 constexpr cage::EmbeddingKind kCageMethods[] = {
     cage::EmbeddingKind::MeanValue, cage::EmbeddingKind::Harmonic, cage::EmbeddingKind::Rbf,
     cage::EmbeddingKind::Green};

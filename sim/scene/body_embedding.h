@@ -9,12 +9,6 @@
 
 namespace sb {
 
-// The options a scene file accepts (assets/scenes/README.md, "embedding"; the same ranges as the
-// scene parser's): a binding the viewer makes must save to a file that loads again. The cage
-// library itself takes more (any harmonic resolution ≥ 4).
-inline constexpr int kSceneHarmonicResolutionMin = 4, kSceneHarmonicResolutionMax = 64;  // cells
-inline constexpr double kSceneRbfShapeMin = 0.0, kSceneRbfShapeMax = 10.0;  // nearest-handle units
-
 // Binds body `body`'s render mesh (re-read from its file) to the body's cage (its start
 // positions, World::restPositions, taken back to the file's coordinates through the body's
 // placement, where a scene load binds too) with `method`, then sets both the body's
@@ -25,9 +19,9 @@ inline constexpr double kSceneRbfShapeMin = 0.0, kSceneRbfShapeMax = 10.0;  // n
 //
 // Throws, with the scene unchanged: std::out_of_range for a body index outside the scene;
 // std::invalid_argument for a body without a render mesh or a lattice body (its mesh follows
-// the lattice's nodes, not a cage) and for an option outside the ranges above (checked before
-// any binding); whatever mesh::readMesh and cage::bindToCage throw (a method the cage library
-// does not bind for cages, a cage it refuses).
+// the lattice's nodes, not a cage) and for an option outside the scene file's ranges (scene.h,
+// checked before any binding); whatever mesh::readMesh and cage::bindToCage throw (a method the
+// cage library does not bind for cages, a cage it refuses).
 void rebindRenderMesh(Scene& scene, int body, const cage::EmbeddingMethod& method,
                       const cage::BindOptions& options = {});
 

@@ -239,8 +239,9 @@ constexpr ParamRange kCageTightness{0.0, 1.0};
 // Interior lattice spacing, metres (interiorLattice bounds the count).
 constexpr ParamRange kInteriorSpacing{0.0, limits::coordinateLimit};
 // Harmonic grid cells along the cage's longest side; RBF shape (sim/cage/rbf.h).
-constexpr ParamRange kHarmonicResolution{4, 64};  // ~5 s at 64 (harmonic.h)
-constexpr ParamRange kRbfShape{0.0, 10.0};
+constexpr ParamRange kHarmonicResolution{kSceneHarmonicResolutionMin,
+                                         kSceneHarmonicResolutionMax};  // ~5 s at 64 (harmonic.h)
+constexpr ParamRange kRbfShape{kSceneRbfShapeMin, kSceneRbfShapeMax};
 constexpr ParamRange kLatticeMargin{0.0, 1.0};
 
 // "embedding": a method name, or {"method": name, options}. FFD is what "lattice" bodies use.
@@ -482,11 +483,11 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMe
     render->path = renderPath;
     render->triangles = detail.triangles;
     try {
-      // Mean value, harmonic (a grid on the cage's box), RBF (shape relative to the handle
-      // spacing) and Green coordinates (their face frames' stretch is taken against the cage in
-      // file coordinates, so a placement's scale enters as it) are invariant under the
-      // placement's similarity transform: bind in file coordinates so the cache is shared by
-      // every placement of the same mesh.
+      // Bound in file coordinates, so every placement of the same mesh shares the bind and its
+      // cache. Mean value, RBF (shape relative to the handle spacing) and Green coordinates
+      // (their face frames' stretch is taken against the cage in file coordinates, so a
+      // placement's scale enters as it) do not depend on the placement's similarity; harmonic
+      // ones (an axis-aligned grid) do, and are those of the mesh as it lies in its file.
       render->embedding = std::make_shared<cage::Embedding>(
           sb.latticeFrame ? cage::bindFfd(detail.vertices, *sb.latticeFrame)
                           : cage::bindToCage(detail.vertices, mesh, sb.embedding, options));

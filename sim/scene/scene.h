@@ -58,6 +58,12 @@ struct LatticeSettings {
   double margin = 0.01;  // the box: the mesh's bounding box grown by margin × its diagonal, [0, 1]
 };
 
+// The "embedding" options a scene file accepts (assets/scenes/README.md): the parser's ranges,
+// and those of a binding the viewer makes, so that it saves to a file that loads again. The cage
+// library itself takes more (any harmonic resolution ≥ 4).
+inline constexpr int kSceneHarmonicResolutionMin = 4, kSceneHarmonicResolutionMax = 64;  // cells
+inline constexpr double kSceneRbfShapeMin = 0.0, kSceneRbfShapeMax = 10.0;  // nearest-handle units
+
 struct SceneBody {
   BodyHandle handle;
   // Particles = this mesh's vertices (as written in the file); empty with an automatic cage.

@@ -12,8 +12,8 @@
 #     tint on body 1 (none before the check was ticked).
 #  4. A surface drag on the lattice body moves it with a point constraint over the lattice
 #     weights: at most the 64 nodes of one B-spline span of the 216.
-#  5. Green: refused (error shown, old binding kept) until scenes take Green coordinates for
-#     cage bodies, accepted (method and weights green) after.
+#  5. Green: accepted (suzanne lies inside its cage: method and weights green), and the fold
+#     check, still on, watches the Green map like the others: no error, body 0 not folded.
 #  6. Save writes the new "embedding" of body 0.
 # usage: embedding_test.sh SOFTBODY CHECK WORKDIR
 SOFTBODY=$1 CHECK=$2 WORK=$3
@@ -135,9 +135,7 @@ nodes=$(held /drag/particles)
   fail "the lattice body did not follow the mouse"
 echo "lattice drag: $nodes nodes held"
 
-# ---- 5. green: refused while the scene library does not bind it for cage bodies, accepted once
-# it does (last but one: the fold check of a Green map is not asserted). Either way the body is in
-# one state, never half switched.
+# ---- 5. green: accepted, in one step (never half switched), and fold-checked like the others
 click_widget "$live" embedding0
 next_frames "$live" 5
 click_widget "$live" embedding0.green
@@ -145,15 +143,14 @@ next_frames "$live" 10
 wait_until /binding false
 method=$(get /bodies/0/embedding/method)
 error=$(get /bodies/0/embedding/error)
-if [ -n "$error" ]; then
-  echo "green refused: $error"
-  [ "$method" = harmonic ] || fail "the refused green bind left method $method"
-  [ "$(get /bodies/0/embedding/boundKind)" = harmonic ] || fail "the refused green bind changed the weights"
-else
-  echo "green accepted"
-  [ "$method" = green ] && [ "$(get /bodies/0/embedding/boundKind)" = green ] ||
-    fail "green accepted without error but method $method, weights $(get /bodies/0/embedding/boundKind)"
-fi
+[ -z "$error" ] || fail "green refused: $error"
+[ "$method" = green ] && [ "$(get /bodies/0/embedding/boundKind)" = green ] ||
+  fail "green accepted but method $method, weights $(get /bodies/0/embedding/boundKind)"
+next_frames "$live" 15  # the fold check runs every 5 frames
+[ "$(get /foldCheck/enabled)" = true ] || fail "the fold check went off"
+[ -z "$(get /foldCheck/error)" ] || fail "the fold check stopped on the Green map: $(get /foldCheck/error)"
+[ "$(get /bodies/0/foldedSamples)" = 0 ] || fail "body 0 (green, at rest) reported as folded"
+echo "green accepted and fold-checked"
 
 # ---- 6. Save writes body 0's embedding ----
 click_widget "$live" sceneHeader
