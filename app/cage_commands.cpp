@@ -145,6 +145,11 @@ int runBindCommand(int argc, char** argv) {
     std::printf("mesh:               %s (%d vertices)\n", meshPath.c_str(), emb.meshVertexCount());
     std::printf("cage:               %s (%d vertices, %zu triangles)\n", cagePath.c_str(),
                 emb.cageVertexCount(), cageMesh.triangles.size());
+    if (mesh::hasPolygonFaces(cageMesh))
+      std::printf("polygon faces:      %zu faces, %s\n", mesh::polygonFaces(cageMesh).size(),
+                  emb.kind() == cage::EmbeddingKind::MeanValue
+                      ? "polygon mean value coordinates (no diagonal dependence)"
+                      : "bound over the reader's fan triangles");
     if (s.fromCache)
       std::printf("time:               cached (%s)\n", cacheDir.c_str());
     else
@@ -235,6 +240,7 @@ int runDeformCommand(int argc, char** argv) {
     emb.deformDouble(cageD, outD);  // double precision for the file; the per-frame path is float
     TriangleMesh out;
     out.triangles = mesh.triangles;
+    out.polygonOf = mesh.polygonOf;  // a quad mesh is written back with quads
     out.vertices.resize(mesh.vertices.size());
     for (std::size_t i = 0; i < out.vertices.size(); ++i)
       out.vertices[i] = outD.row(static_cast<Eigen::Index>(i)).transpose();

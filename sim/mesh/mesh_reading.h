@@ -143,8 +143,9 @@ inline void addFace(TriangleMesh& mesh, const std::vector<int>& face, const std:
     for (size_t a = 0; a < k; ++a)
       for (size_t b = a + 1; b < k; ++b)
         if (face[a] == face[b])
-          fail(where + "a polygon repeats its corner " + std::to_string(face[a]) +
-               " (corners must be distinct)");
+          fail(where + "a polygon repeats a corner: corners " + std::to_string(a + 1) + " and " +
+               std::to_string(b + 1) + " of " + std::to_string(k) +
+               " are the same vertex (corners must be distinct)");
     // Newell's vector: twice the vector area of the polygon, planar or not.
     Eigen::Vector3d area = Eigen::Vector3d::Zero();
     double longest = 0.0;

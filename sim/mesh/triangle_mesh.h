@@ -17,7 +17,7 @@ struct TriangleMesh {
   // id, so the polygon can be rebuilt (polygonFaces). Everything that works on triangles
   // ignores it; polygon mean value coordinates (sim/cage/polygon_mvc.h) use it. Code that
   // edits `triangles` must clear or update it.
-  std::vector<int> polygonOf;
+  std::vector<int> polygonOf{};
 };
 
 // The faces of a mesh as corner lists (counter-clockwise from outside): the polygons recorded
