@@ -319,6 +319,36 @@ TEST(PolygonMvc, PartitionOfUnityAndLinearPrecisionOnQuadAndMixedCages) {
   for (double wj : polygonWeights(box, Vec3(1.0, 0.5, 0.75))) EXPECT_NEAR(wj, 0.125, 1e-15);
 }
 
+// Non-convex planar faces: an L-shaped prism (two L hexagons, six rectangles), with the bottom's
+// fan from the reflex corner (its triangles tile the L) and from another corner (a fan triangle
+// covers the notch and a reversed one cancels it: topologically closed, geometrically not a
+// triangulation). Polygon MVC does not look at the fan: the same weights, linearly precise.
+TEST(PolygonMvc, NonConvexHexagonFaces) {
+  const std::vector<Vec2> l = {{1, 1}, {1, 2}, {0, 2}, {0, 0}, {2, 0}, {2, 1}};  // reflex first
+  std::vector<Vec3> v;
+  for (double z : {0.0, 0.7})
+    for (const Vec2& p : l) v.emplace_back(p.x(), p.y(), z);
+  Faces faces = {{0, 5, 4, 3, 2, 1}, {6, 7, 8, 9, 10, 11}};
+  for (int i = 0; i < 6; ++i) faces.push_back({i, (i + 1) % 6, 6 + (i + 1) % 6, 6 + i});
+  const mesh::TriangleMesh tiled = readObj(objText(v, faces));
+  const mesh::TriangleMesh folded = readObj(objText(v, faces, {2, 0, 0, 0, 0, 0, 0, 0}));
+  mesh::validateClosedSurface(tiled, "L prism");
+  mesh::validateClosedSurface(folded, "L prism");
+  const PolygonMeanValueCage a(tiled), b(folded);
+  EXPECT_EQ(a.planarFaceCount(), 8);
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<double> u(0.01, 0.99);
+  int tested = 0;
+  while (tested < 300) {
+    const Vec3 x(2 * u(rng), 2 * u(rng), 0.7 * u(rng));
+    if (x.x() > 1.0 && x.y() > 1.0) continue;  // the notch
+    ++tested;
+    const std::vector<double> wa = polygonWeights(a, x), wb = polygonWeights(b, x);
+    EXPECT_LT(invariantError(v, wa, x), 1e-12) << x.transpose();
+    for (std::size_t j = 0; j < wa.size(); ++j) EXPECT_NEAR(wa[j], wb[j], 1e-14);
+  }
+}
+
 TEST(PolygonMvc, CyclicRelabellingChangesNothing) {
   const std::vector<Vec3> v = frustumVertices();
   const PolygonMeanValueCage reference(readObj(objText(v, kHexFaces)));
@@ -437,6 +467,19 @@ TEST(PolygonCage, ReadersKeepPolygonsAndWriteThemBack) {
     off += "\n";
   }
   EXPECT_EQ(mesh::polygonFaces(mesh::parseMesh(off, mesh::MeshFormat::Off, "c.off")), kPrismFaces);
+  // So does ASCII PLY.
+  std::string ply =
+      "ply\nformat ascii 1.0\nelement vertex 6\nproperty double x\nproperty double "
+      "y\nproperty double z\nelement face 5\nproperty list uchar int "
+      "vertex_indices\nend_header\n";
+  for (const Vec3& p : prismVertices())
+    ply += std::to_string(p.x()) + " " + std::to_string(p.y()) + " " + std::to_string(p.z()) + "\n";
+  for (const auto& f : kPrismFaces) {
+    ply += std::to_string(f.size());
+    for (int c : f) ply += " " + std::to_string(c);
+    ply += "\n";
+  }
+  EXPECT_EQ(mesh::polygonFaces(mesh::parseMesh(ply, mesh::MeshFormat::Ply, "c.ply")), kPrismFaces);
   // A triangle file records nothing.
   EXPECT_TRUE(test_data::bunnyCage().polygonOf.empty());
   // writeObj → readMesh keeps the quads.
