@@ -135,6 +135,11 @@ int runBindCommand(int argc, char** argv) {
     if (emb.kind() == cage::EmbeddingKind::Green)
       std::printf("controls:           %d (a weight per cage vertex and per face normal)\n",
                   emb.weightColumns());
+    if (mesh::hasPolygonFaces(cageMesh))
+      std::printf("polygon faces:      %zu faces, %s\n", mesh::polygonFaces(cageMesh).size(),
+                  emb.kind() == cage::EmbeddingKind::MeanValue
+                      ? "polygon mean value coordinates (no diagonal dependence)"
+                      : "bound over the reader's fan triangles");
     if (s.fromCache)
       std::printf("time:               cached (%s)\n", cacheDir.c_str());
     else
@@ -225,6 +230,7 @@ int runDeformCommand(int argc, char** argv) {
     emb.deformDouble(cageD, outD);  // double precision for the file; the per-frame path is float
     TriangleMesh out;
     out.triangles = mesh.triangles;
+    out.polygonOf = mesh.polygonOf;  // a quad mesh is written back with quads
     out.vertices.resize(mesh.vertices.size());
     for (std::size_t i = 0; i < out.vertices.size(); ++i)
       out.vertices[i] = outD.row(static_cast<Eigen::Index>(i)).transpose();

@@ -302,6 +302,12 @@ std::array<std::uint64_t, 2> bindCacheKey(const std::vector<Vec3>& points, const
     h.value(static_cast<std::uint64_t>(cage.triangles.size()));
     if (!cage.triangles.empty())
       h.bytes(cage.triangles.data(), cage.triangles.size() * sizeof(std::array<int, 3>));
+    // Polygon faces change the weights (polygon MVC): a triangle bind of the same triangles is
+    // not reused. A triangle-only cage (polygonOf empty) keeps its old key.
+    if (!cage.polygonOf.empty()) {
+      h.value(static_cast<std::uint64_t>(0x706f6c79ull));  // "poly"
+      h.bytes(cage.polygonOf.data(), cage.polygonOf.size() * sizeof(int));
+    }
     h.value(static_cast<std::uint64_t>(options.storage));
     h.value(static_cast<std::int64_t>(options.denseMaxCageVertices));
     h.value(options.pruneThreshold);

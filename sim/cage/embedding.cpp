@@ -18,6 +18,7 @@
 #include "sim/cage/deform_kernels.h"
 #include "sim/cage/green.h"
 #include "sim/cage/mvc.h"
+#include "sim/cage/polygon_mvc.h"
 #include "sim/mesh/closed_surface.h"
 
 namespace sb::cage {
@@ -114,6 +115,27 @@ double pruneRow(std::vector<std::pair<int, double>>& row, const double* w, int m
   }
   return change;
 }
+
+}  // namespace
+
+namespace {
+
+// The weights of one point: triangle MVC (mvc.h), or polygon MVC (polygon_mvc.h) when the cage
+// has faces of more than three corners (mesh::hasPolygonFaces), so a quad cage's weights do not
+// depend on the diagonal its file reader picked. A triangle cage takes the triangle path
+// unchanged (same bits, same speed).
+struct CageWeights {
+  const MeanValueCage& triangles;
+  const PolygonMeanValueCage* polygons;
+  struct Scratch {
+    MeanValueCage::Scratch triangles;
+    PolygonMeanValueCage::Scratch polygons;
+  };
+  bool operator()(const Vec3& x, double* w, Scratch& s, MvcInfo* info = nullptr) const {
+    return polygons ? polygons->weights(x, w, s.polygons, info)
+                    : triangles.weights(x, w, s.triangles, info);
+  }
+};
 
 }  // namespace
 
@@ -334,6 +356,9 @@ Embedding bindMeanValue(const std::vector<Vec3>& points, const TriangleMesh& cag
 
   const auto t0 = std::chrono::steady_clock::now();
   const MeanValueCage prepared(cage);
+  std::optional<PolygonMeanValueCage> polygons;
+  if (mesh::hasPolygonFaces(cage)) polygons.emplace(cage);
+  const CageWeights weigh{prepared, polygons ? &*polygons : nullptr};
   const int n = static_cast<int>(points.size());
   const int m = prepared.vertexCount();
   const double L = prepared.diagonal();
@@ -360,13 +385,13 @@ Embedding bindMeanValue(const std::vector<Vec3>& points, const TriangleMesh& cag
   int samples = 0;
   if (sparse && n > 0) {
     samples = std::min(n, 64);
-    MeanValueCage::Scratch scratch;
+    CageWeights::Scratch scratch;
     std::vector<double> w(static_cast<std::size_t>(m));
     std::vector<Vec3> q(static_cast<std::size_t>(m));
     std::vector<std::pair<int, double>> row;
     for (int k = 0; k < samples; ++k) {
       const Vec3& x = points[static_cast<std::size_t>(static_cast<std::int64_t>(k) * n / samples)];
-      if (!prepared.weights(x, w.data(), scratch)) continue;
+      if (!weigh(x, w.data(), scratch)) continue;
       for (int j = 0; j < m; ++j) q[j] = (cage.vertices[j] - x) / L;
       pruneRow(row, w.data(), m, q, options.pruneThreshold);
       kept += static_cast<std::int64_t>(row.size());
@@ -401,13 +426,13 @@ Embedding bindMeanValue(const std::vector<Vec3>& points, const TriangleMesh& cag
   for (int start = 0; start < n; start += block) {
     const int end = std::min(n, start + block);
     parallelRanges(end - start, 2, threads, [&](int rangeBegin, int rangeEnd) {
-      MeanValueCage::Scratch scratch;
+      CageWeights::Scratch scratch;
       std::vector<double> w(static_cast<std::size_t>(m));
       std::vector<Vec3> q;
       for (int i = start + rangeBegin; i < start + rangeEnd; ++i) {
         const Vec3& x = points[static_cast<std::size_t>(i)];
         MvcInfo info;
-        if (!prepared.weights(x, w.data(), scratch, &info)) failed[i] = 1;
+        if (!weigh(x, w.data(), scratch, &info)) failed[i] = 1;
         cond[i] = info.conditioning;
         onCage[i] = info.kind != MvcCase::General;
         Vec3 p = Vec3::Zero();

@@ -188,8 +188,9 @@ void measureWeights(Embedding& e, const std::vector<Eigen::Vector3d>& points,
 // or re-seal files; the fuzz target re-seals its inputs to reach the checks behind it).
 std::uint64_t weightFileChecksum(const std::string& bytesBeforeChecksum);
 
-// The cache key: a 128-bit hash of the points, the cage vertices and triangles and the options
-// that change the result (storage rule, threshold, precision), plus the file format version.
+// The cache key: a 128-bit hash of the points, the cage vertices and triangles (and polygon ids,
+// TriangleMesh::polygonOf, when present) and the options that change the result (storage rule,
+// threshold, precision), plus the file format version.
 std::array<std::uint64_t, 2> bindCacheKey(const std::vector<Eigen::Vector3d>& points,
                                           const mesh::TriangleMesh& cage,
                                           const BindOptions& options);
@@ -206,8 +207,9 @@ void saveCachedBind(const Embedding& e, const std::string& path,
                     const std::array<std::uint64_t, 2>& key, const BindOptions& options);
 
 // Validates the cage (throws mesh::SurfaceError), then computes mean value coordinates of every
-// point. With options.cacheDir set, reuses a cached bind with the same key, else binds and writes
-// it.
+// point: triangle MVC (mvc.h), or polygon MVC (polygon_mvc.h) when the cage has faces of more
+// than three corners (mesh::hasPolygonFaces), so a quad cage does not depend on its diagonals. With
+// options.cacheDir set, reuses a cached bind with the same key, else binds and writes it.
 Embedding bindMeanValue(const std::vector<Eigen::Vector3d>& points, const mesh::TriangleMesh& cage,
                         const BindOptions& options = {});
 

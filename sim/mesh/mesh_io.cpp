@@ -83,8 +83,12 @@ void writeObj(const std::string& path, const TriangleMesh& mesh) {
         std::snprintf(line, sizeof line, "v %.17g %.17g %.17g\n", v.x(), v.y(), v.z());
         out << line;
       }
-      for (const auto& t : mesh.triangles)
-        out << "f " << t[0] + 1 << " " << t[1] + 1 << " " << t[2] + 1 << "\n";
+      // Polygons read from a file are written back as polygons (polygonFaces).
+      for (const auto& face : polygonFaces(mesh)) {
+        out << "f";
+        for (const int c : face) out << " " << c + 1;
+        out << "\n";
+      }
     });
   } catch (const FileError& e) {
     throw MeshError(e.what());

@@ -15,6 +15,8 @@
 #include <string_view>
 #include <vector>
 
+#include <Eigen/Geometry>
+
 #include "sim/base/types.h"
 #include "sim/mesh/triangle_mesh.h"
 
@@ -130,9 +132,39 @@ inline int parseCount(string_view token, const std::string& what) {
   return int(n);
 }
 
-inline void addFace(TriangleMesh& mesh, const std::vector<int>& face) {
-  for (size_t k = 1; k + 1 < face.size(); ++k)
-    mesh.triangles.push_back({face[0], face[k], face[k + 1]});
+// Adds a face (≥ 3 corners, indices checked by the caller) as a fan of triangles from its first
+// corner. A polygon (≥ 4 corners) is recorded in mesh.polygonOf (TriangleMesh) so polygon mean
+// value coordinates can rebuild it; a file of triangles only leaves polygonOf empty. A polygon
+// must have distinct corners and a nonzero area (its triangles are checked later with the
+// closed surface, but a broken polygon is reported here, where the file line is known).
+inline void addFace(TriangleMesh& mesh, const std::vector<int>& face, const std::string& where) {
+  const size_t k = face.size();
+  if (k >= 4) {
+    for (size_t a = 0; a < k; ++a)
+      for (size_t b = a + 1; b < k; ++b)
+        if (face[a] == face[b])
+          fail(where + "a polygon repeats a corner: corners " + std::to_string(a + 1) + " and " +
+               std::to_string(b + 1) + " of " + std::to_string(k) +
+               " are the same vertex (corners must be distinct)");
+    // Newell's vector: twice the vector area of the polygon, planar or not.
+    Eigen::Vector3d area = Eigen::Vector3d::Zero();
+    double longest = 0.0;
+    for (size_t a = 0; a < k; ++a) {
+      const Eigen::Vector3d& p = mesh.vertices[size_t(face[a])];
+      const Eigen::Vector3d& q = mesh.vertices[size_t(face[(a + 1) % k])];
+      area += p.cross(q);
+      longest = std::max(longest, (q - p).norm());
+    }
+    if (!(area.norm() > 1e-12 * longest * longest))
+      fail(where + "degenerate polygon of " + std::to_string(k) + " corners (zero area)");
+    if (mesh.polygonOf.empty())  // the triangles so far were faces of their own
+      for (size_t t = 0; t < mesh.triangles.size(); ++t) mesh.polygonOf.push_back(int(t));
+  }
+  if (k >= 4 || !mesh.polygonOf.empty()) {
+    const int id = mesh.polygonOf.empty() ? 0 : mesh.polygonOf.back() + 1;
+    mesh.polygonOf.insert(mesh.polygonOf.end(), k - 2, id);
+  }
+  for (size_t c = 1; c + 1 < k; ++c) mesh.triangles.push_back({face[0], face[c], face[c + 1]});
 }
 
 // Big-endian / little-endian readers over the remaining bytes.

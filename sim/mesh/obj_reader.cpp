@@ -43,7 +43,7 @@ TriangleMesh parseObj(string_view text) {
       }
       if (face.size() < 3)
         fail(where + "a face needs at least 3 vertices, got " + std::to_string(face.size()));
-      addFace(mesh, face);
+      addFace(mesh, face, where);
     }
   }
   return mesh;

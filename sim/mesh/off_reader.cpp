@@ -52,7 +52,7 @@ TriangleMesh parseOffBinary(string_view text, size_t start) {
     const std::int32_t colours = in.get<std::int32_t>("the faces");
     if (colours < 0 || colours > 4) fail(where + "bad colour count " + std::to_string(colours));
     for (int c = 0; c < colours; ++c) (void)in.get<float>("the faces");
-    addFace(mesh, face);
+    addFace(mesh, face, where);
   }
   if (in.left() != 0)
     fail("binary OFF: " + std::to_string(in.left()) + " bytes after the " + std::to_string(nf) +
@@ -138,7 +138,7 @@ TriangleMesh parseOff(string_view text) {
       double extra;
       if (!parseDouble(tok, extra)) fail(where + "not a number: " + quoted(tok));
     }
-    addFace(mesh, face);
+    addFace(mesh, face, where);
   }
   if (nextLine(t))
     fail(lineText(lines.number()) + "data after the " + std::to_string(nv) + " vertices and " +

@@ -240,7 +240,7 @@ TriangleMesh parsePly(string_view text) {
                  std::to_string(vertexCount) + " vertices)");
           face.push_back(int(v));
         }
-        if (faceList) addFace(mesh, face);
+        if (faceList) addFace(mesh, face, where);
       }
       if (isVertex) {
         for (double v : c) checkCoordinate(v, where);

@@ -16,10 +16,18 @@
 //                                               like the exact bend there), the mean anisotropy
 //                                               σmax/σmin of J J_bend⁻¹ − 1 (0 = conformal to
 //                                               it), and the folded share.
+//   bench_embeddings --benchmark_filter=QuadCage  bind of 8000 random points inside a box cage of
+//                                               216 planar quads (218 vertices, a 6×6 grid per
+//                                               side) with triangle MVC over the reader's fan
+//                                               triangles (polygon=0) and with polygon MVC
+//                                               (polygon=1), 1 and 2 threads; counter ns per
+//                                               point per cage vertex.
 // Methods: 0 mvc, 1 harmonic (resolution 32), 2 rbf (shape 1), 3 ffd-bspline.
 #include <benchmark/benchmark.h>
 
 #include <Eigen/SVD>
+#include <array>
+#include <chrono>
 #include <cmath>
 #include <map>
 #include <memory>
@@ -213,6 +221,73 @@ void BM_BentBar(benchmark::State& state) {
 BENCHMARK(BM_BentBar)
     ->DenseRange(0, 3)
     ->ArgName("method")
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1);
+
+// A box [0,2]×[0,1.5]×[0,1] with an n×n grid of quads on each side, as an OBJ read by the
+// project's reader (so it carries its polygons).
+TriangleMesh quadBox(int n) {
+  std::map<std::array<int, 3>, int> index;
+  std::string obj;
+  auto vertex = [&](std::array<int, 3> g) {
+    auto [it, added] = index.emplace(g, int(index.size()) + 1);
+    if (added)
+      obj += "v " + std::to_string(2.0 * g[0] / n) + " " + std::to_string(1.5 * g[1] / n) + " " +
+             std::to_string(1.0 * g[2] / n) + "\n";
+    return it->second;
+  };
+  // Each side: axis a fixed at 0 or n, the other two (u, v) running; corners counter-clockwise
+  // seen from outside.
+  for (int a = 0; a < 3; ++a)
+    for (int side = 0; side < 2; ++side)
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+          const int u = (a + 1) % 3, v = (a + 2) % 3;
+          auto at = [&](int di, int dj) {
+            std::array<int, 3> g{};
+            g[size_t(a)] = side * n;
+            g[size_t(u)] = i + di;
+            g[size_t(v)] = j + dj;
+            return vertex(g);
+          };
+          const int c[4] = {at(0, 0), at(1, 0), at(1, 1), at(0, 1)};
+          obj += side ? "f " + std::to_string(c[0]) + " " + std::to_string(c[1]) + " " +
+                            std::to_string(c[2]) + " " + std::to_string(c[3]) + "\n"
+                      : "f " + std::to_string(c[0]) + " " + std::to_string(c[3]) + " " +
+                            std::to_string(c[2]) + " " + std::to_string(c[1]) + "\n";
+        }
+  return sb::mesh::parseMesh(obj, sb::mesh::MeshFormat::Obj, "quad_box.obj");
+}
+
+void BM_QuadCageBind(benchmark::State& state) {
+  const bool polygon = state.range(0) != 0;
+  const int threads = int(state.range(1));
+  TriangleMesh cage = quadBox(6);
+  if (!polygon) cage.polygonOf.clear();  // the same triangles, bound by triangle MVC
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(0.02, 0.98);
+  std::vector<Vec3> points(8000);
+  for (Vec3& p : points) p = Vec3(2.0 * u(rng), 1.5 * u(rng), u(rng));
+  BindOptions o;
+  o.storage = WeightStorage::Dense;
+  o.threads = threads;
+  double seconds = 0.0;
+  Embedding e;
+  for (auto _ : state) {
+    const auto t0 = std::chrono::steady_clock::now();
+    e = bindToCage(points, cage, EmbeddingMethod{}, o);
+    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    benchmark::DoNotOptimize(e.nonZeros());
+  }
+  state.SetLabel(polygon ? "polygon mvc" : "triangle mvc");
+  state.counters["cage_vertices"] = double(cage.vertices.size());
+  state.counters["ns_per_point_vertex"] =
+      seconds * 1e9 / (double(points.size()) * double(cage.vertices.size()));
+  state.counters["lin_err"] = e.stats().maxLinearError;
+}
+BENCHMARK(BM_QuadCageBind)
+    ->ArgsProduct({{0, 1}, {1, 2}})
+    ->ArgNames({"polygon", "threads"})
     ->Unit(benchmark::kMillisecond)
     ->Iterations(1);
 

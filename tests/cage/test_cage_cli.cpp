@@ -9,6 +9,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include <Eigen/Dense>
 
@@ -98,6 +99,86 @@ TEST_F(Cli, DeformAppliesTheCageMotion) {
       err = std::max(err, (out.vertices[i] - (A * mesh.vertices[i] + t)).norm());
     EXPECT_LT(err / testing::diagonal(moved), 1e-10);
   }
+}
+
+// A cage of planar quads (a frustum over a general quadrilateral) in an OBJ: bind reports its
+// polygons, deform reproduces an affine cage motion, and the result does not depend on which
+// corner each face starts at (the diagonal the reader's fan would pick). A polygon with a
+// repeated corner is refused naming the file and line.
+TEST_F(Cli, QuadCageBindsAndDeforms) {
+  const Vec3 bottom[4] = {{0.0, 0.0, 0.0}, {2.2, 0.3, 0.0}, {1.9, 2.1, 0.0}, {-0.2, 1.7, 0.0}};
+  const Vec3 apex(0.7, 1.1, 3.0);
+  std::vector<Vec3> v(bottom, bottom + 4);
+  for (const Vec3& b : bottom) v.push_back(apex + 0.45 * (b - apex));
+  const std::vector<std::vector<int>> faces = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4},
+                                               {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+  auto writeCage = [&](const std::string& name, const std::vector<Vec3>& at, int rotate,
+                       const std::string& extra) {
+    std::ofstream f(path(name));
+    f.precision(17);
+    for (const Vec3& p : at) f << "v " << p.x() << " " << p.y() << " " << p.z() << "\n";
+    for (const auto& face : faces) {
+      f << "f";
+      for (std::size_t c = 0; c < 4; ++c) f << " " << face[(c + std::size_t(rotate)) % 4] + 1;
+      f << "\n";
+    }
+    f << extra;
+  };
+  const Eigen::Matrix3d A =
+      (Eigen::Matrix3d() << 0.9, 0.2, 0.0, -0.1, 1.1, 0.3, 0.05, 0.0, 0.8).finished();
+  const Vec3 t(1.0, 2.0, -0.5);
+  std::vector<Vec3> movedAffine, movedBent;
+  for (const Vec3& p : v) {
+    movedAffine.push_back(A * p + t);
+    movedBent.push_back(p + Vec3(0.3 * p.z() * p.z(), 0.0, 0.1 * p.x()));  // not affine
+  }
+  writeCage("cage.obj", v, 0, "");
+  writeCage("cage_rotated.obj", v, 1, "");
+  writeCage("affine.obj", movedAffine, 0, "");
+  writeCage("bent.obj", movedBent, 0, "");
+  writeCage("bent_rotated.obj", movedBent, 1, "");
+  // The detailed mesh: points inside the frustum.
+  TriangleMesh points;
+  for (int i = 1; i < 4; ++i)
+    for (int j = 1; j < 4; ++j)
+      for (int k = 1; k < 4; ++k) {
+        const Vec3 b =
+            bottom[0] + 0.25 * i * (bottom[1] - bottom[0]) + 0.25 * j * (bottom[3] - bottom[0]);
+        // Between the top (scale 0.45 towards the apex) and the bottom (scale 1).
+        points.vertices.push_back(apex + 0.9 * (1.0 - 0.1375 * k) * (b - apex));
+      }
+  writeObj(path("points.obj"), points);
+
+  const ProcessResult b = run("bind --mesh " + path("points.obj") + " --cage " + path("cage.obj") +
+                              " --out " + path("w.sbw"));
+  ASSERT_EQ(b.code, 0) << b.err;
+  EXPECT_NE(b.out.find("polygon faces:      6 faces, polygon mean value coordinates"),
+            std::string::npos)
+      << b.out;
+  EXPECT_LT(Embedding::load(path("w.sbw")).stats().maxLinearError, 1e-12);
+
+  auto deform = [&](const std::string& cage, const std::string& moved) {
+    const ProcessResult r = run("deform --mesh " + path("points.obj") + " --cage " + path(cage) +
+                                " --deformed-cage " + path(moved) + " --out " + path("out.obj"));
+    EXPECT_EQ(r.code, 0) << r.err;
+    return readMesh(path("out.obj")).vertices;
+  };
+  const std::vector<Vec3> affine = deform("cage.obj", "affine.obj");
+  ASSERT_EQ(affine.size(), points.vertices.size());
+  for (std::size_t i = 0; i < affine.size(); ++i)
+    EXPECT_LT((affine[i] - (A * points.vertices[i] + t)).norm(), 1e-10);
+  const std::vector<Vec3> bent = deform("cage.obj", "bent.obj");
+  const std::vector<Vec3> bentRotated = deform("cage_rotated.obj", "bent_rotated.obj");
+  ASSERT_EQ(bent.size(), bentRotated.size());
+  for (std::size_t i = 0; i < bent.size(); ++i) EXPECT_LT((bent[i] - bentRotated[i]).norm(), 1e-10);
+
+  writeCage("broken.obj", v, 0, "f 1 2 3 2\n");
+  const ProcessResult bad =
+      run("bind --mesh " + path("points.obj") + " --cage " + path("broken.obj"));
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.err.find("broken.obj: line 15: a polygon repeats a corner: corners 2 and 4"),
+            std::string::npos)
+      << bad.err;
 }
 
 // --method: each method binds and deforms through the same commands; the weight file keeps

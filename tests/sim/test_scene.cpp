@@ -795,5 +795,65 @@ TEST(Scene, BodiesAreAddedAndRemovedOneAtATime) {
   EXPECT_TRUE(scene.world.positions(scene.bodies.back().handle).allFinite());
 }
 
+// A body whose cage file has quad faces: it loads (closed surface over the fan triangles,
+// contact surface from them) and its render mesh is bound with polygon mean value coordinates,
+// so the weights do not depend on the corner each quad starts at in the file.
+TEST(Scene, QuadCageBodyBindsWithPolygonMvc) {
+  const fs::path dir = fs::temp_directory_path() / "softbody_quad_cage_scene";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  ::setenv("SOFTBODY_CACHE_DIR", (dir / "cache").c_str(), 1);
+  // A box [0,2]×[0,1]×[0,1.5] of six quads, written twice: each quad from its first corner and
+  // from its second (the other diagonal for a fan triangulation).
+  const std::vector<std::vector<int>> faces = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                               {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (int rotate = 0; rotate < 2; ++rotate) {
+    std::ofstream f(dir / ("cage" + std::to_string(rotate) + ".obj"));
+    for (int k = 0; k < 2; ++k)
+      for (int j = 0; j < 2; ++j)
+        for (int i = 0; i < 2; ++i) f << "v " << 2 * i << " " << j << " " << 1.5 * k << "\n";
+    for (const auto& face : faces) {
+      f << "f";
+      for (int c = 0; c < 4; ++c) f << " " << face[size_t((c + rotate) % 4)] + 1;
+      f << "\n";
+    }
+  }
+  {
+    std::ofstream f(dir / "detail.obj");
+    f << "v 0.3 0.2 0.2\nv 1.7 0.3 0.4\nv 1.0 0.8 0.3\nv 0.9 0.5 1.3\n"
+         "f 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n";
+  }
+  std::vector<std::vector<std::pair<int, double>>> rows[2];
+  for (int rotate = 0; rotate < 2; ++rotate) {
+    const std::string text = R"({"bodies": [{"name": "q", "mesh": ")" +
+                             (dir / ("cage" + std::to_string(rotate) + ".obj")).string() +
+                             R"(", "renderMesh": ")" + (dir / "detail.obj").string() +
+                             R"(", "translation": [0, 1, 0]}]})";
+    const Scene scene = parseScene(text, "quad.json", "");
+    ASSERT_EQ(scene.bodies.size(), 1u);
+    const SceneBody& b = scene.bodies[0];
+    EXPECT_EQ(b.cageVertexCount, 8);
+    EXPECT_EQ(b.cageTriangles.size(), 12u);
+    ASSERT_TRUE(b.render && b.render->embedding);
+    for (int i = 0; i < 4; ++i) {
+      rows[rotate].emplace_back();
+      b.render->embedding->rowWeights(i, rows[rotate].back());
+    }
+    // At rest the render mesh is the placed file.
+    PointsRowMajor rendered;
+    scene.renderVertices(0, rendered);
+    ASSERT_EQ(rendered.rows(), 4);
+    EXPECT_NEAR(rendered(0, 1), 1.2f, 1e-6f);
+    EXPECT_NEAR(rendered(3, 2), 1.3f, 1e-6f);
+  }
+  // Same weights from both files (a triangle bind would not give them: test_polygon_mvc.cpp).
+  for (int i = 0; i < 4; ++i) {
+    ASSERT_EQ(rows[0][size_t(i)].size(), rows[1][size_t(i)].size());
+    for (size_t k = 0; k < rows[0][size_t(i)].size(); ++k)
+      EXPECT_NEAR(rows[0][size_t(i)][k].second, rows[1][size_t(i)][k].second, 1e-14);
+  }
+  fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace sb
