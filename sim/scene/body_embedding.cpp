@@ -77,6 +77,7 @@ void rebindRenderMesh(Scene& scene, int body, const cage::EmbeddingMethod& metho
     cage.vertices.push_back(Rt * (start.row(i).transpose().cast<double>() - b.translation) /
                             b.scale);
   cage.triangles = b.cageTriangles;
+  cage.polygonOf = b.cagePolygonOf;
   const std::vector<Vec3>& points = file.vertices;
 
   // Bind completely first; only a finished bind replaces the old one (nothing half-switched).

@@ -53,6 +53,7 @@ bool FoldWatch::watch(const Scene& scene, int i, Watched* out) const {
           : cagePositions(scene, b);
   for (Eigen::Index j = 0; j < now.rows(); ++j) cage.vertices.push_back(now.row(j).transpose());
   cage.triangles = b.cageTriangles;
+  cage.polygonOf = b.cagePolygonOf;
   const cage::FoldSampling s = cage::foldSamples(cage, samplesPerBody_);
   w.probes = cage::makeFoldProbes(s.samples, s.step, [&](const std::vector<Vec3>& points) {
     return cage::bindToCage(points, cage, b.embedding);

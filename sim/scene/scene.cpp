@@ -469,6 +469,7 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMe
     }
   }
   sb.cageTriangles = mesh.triangles;
+  sb.cagePolygonOf = mesh.polygonOf;
   // The cage is the body's surface for body–body contact (the World checks it is closed).
   if (sb.contact) def.surface = mesh.triangles;
 

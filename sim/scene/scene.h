@@ -83,7 +83,11 @@ struct SceneBody {
   double interiorSpacing = 0.0;
   int cageVertexCount = 0;
   std::vector<std::array<int, 3>> cageTriangles;  // the particle mesh's faces (may be empty)
-  std::shared_ptr<RenderMesh> render;             // null when the body has no render mesh
+  // The polygon of each cage triangle when the cage file had faces of more than 3 corners
+  // (mesh::TriangleMesh::polygonOf; empty otherwise): re-binds use polygon coordinates as the
+  // load did.
+  std::vector<int> cagePolygonOf;
+  std::shared_ptr<RenderMesh> render;  // null when the body has no render mesh
   // "embedding": how the render mesh follows the cage: "mvc" (the default), "harmonic", "rbf" or
   // "green" (the render mesh must lie inside the cage), or an object {"method": …,
   // "resolution": n (harmonic), "shape": s (rbf)} (sim/cage/bind.h).

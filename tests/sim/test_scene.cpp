@@ -6,6 +6,7 @@
 #include <fstream>
 
 #include "sim/mesh/mesh_io.h"
+#include "sim/scene/body_embedding.h"
 #include "sim/scene/fold_watch.h"
 #include "sim/scene/frame_export.h"
 #include "sim/scene/scene.h"
@@ -829,15 +830,25 @@ TEST(Scene, QuadCageBodyBindsWithPolygonMvc) {
                              (dir / ("cage" + std::to_string(rotate) + ".obj")).string() +
                              R"(", "renderMesh": ")" + (dir / "detail.obj").string() +
                              R"(", "translation": [0, 1, 0]}]})";
-    const Scene scene = parseScene(text, "quad.json", "");
+    Scene scene = parseScene(text, "quad.json", "");
     ASSERT_EQ(scene.bodies.size(), 1u);
     const SceneBody& b = scene.bodies[0];
     EXPECT_EQ(b.cageVertexCount, 8);
     EXPECT_EQ(b.cageTriangles.size(), 12u);
+    EXPECT_EQ(b.cagePolygonOf.size(), 12u);
     ASSERT_TRUE(b.render && b.render->embedding);
     for (int i = 0; i < 4; ++i) {
       rows[rotate].emplace_back();
       b.render->embedding->rowWeights(i, rows[rotate].back());
+    }
+    // A re-bind (the viewer's switch) binds the quads as the load did.
+    rebindRenderMesh(scene, 0, cage::EmbeddingMethod{});
+    std::vector<std::pair<int, double>> again;
+    for (int i = 0; i < 4; ++i) {
+      scene.bodies[0].render->embedding->rowWeights(i, again);
+      ASSERT_EQ(again.size(), rows[rotate][size_t(i)].size());
+      for (size_t k = 0; k < again.size(); ++k)
+        EXPECT_NEAR(again[k].second, rows[rotate][size_t(i)][k].second, 1e-12);
     }
     // At rest the render mesh is the placed file.
     PointsRowMajor rendered;
