@@ -351,14 +351,7 @@ bool MeanValueCage::weights(const Vec3& x, double* w, Scratch& sc, MvcInfo* info
         double wp[3], wm[3];
         triangleAlone(pp, t, wp);
         triangleAlone(pm, t, wm);
-        for (int k = 0; k < 3; ++k) {
-          const double gp = wp[k] / hp, gm = wm[k] / hm;
-          const double g = 0.5 * (gp + gm) + (h - 0.5 * (hp + hm)) * (gp - gm) / (hp - hm);
-          wt[k] = h * g;
-          // Unresolvable heights (cannot happen with the δ floor): the contribution vanishes
-          // in the plane, so 0 is the limit.
-          if (!(hp > 0.0 && hm < 0.0 && std::isfinite(wt[k]))) wt[k] = 0.0;
-        }
+        for (int k = 0; k < 3; ++k) wt[k] = planeBandContribution(h, hp, hm, wp[k], wm[k]);
       }
       // else: close to the plane but over (or near) the face: the closed form is accurate.
     }

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <vector>
 
 #include <Eigen/Core>
@@ -87,5 +88,17 @@ bool mvcWeights(const Eigen::Vector3d& x, const mesh::TriangleMesh& cage, double
 inline constexpr double kOnCageTolerance = 1e-13;  // × cage diagonal: snap to vertex / face
 inline constexpr double kPlaneBand =
     1e-4;  // |height| < 1e-4 × distance to a face: in-plane treatment
+
+// In the plane band the closed form of a face's contribution to a weight is 0/0; the
+// contribution is h · g(x) with g smooth (it vanishes in the plane). Given the closed form wp, wm
+// at heights hp > 0 > hm (δ = kPlaneBand·ρ off the plane, where it is accurate), g is
+// interpolated linearly to the height h (error O(δ³/ρ³) relative). Heights that cannot be
+// resolved (not possible with the δ floor of the callers) give 0, the limit in the plane.
+inline double planeBandContribution(double h, double hp, double hm, double wp, double wm) {
+  const double gp = wp / hp, gm = wm / hm;
+  const double g = 0.5 * (gp + gm) + (h - 0.5 * (hp + hm)) * (gp - gm) / (hp - hm);
+  const double w = h * g;
+  return hp > 0.0 && hm < 0.0 && std::isfinite(w) ? w : 0.0;
+}
 
 }  // namespace sb::cage

@@ -217,12 +217,7 @@ bool PolygonMeanValueCage::weights(const Vec3& x, double* w, Scratch& sc, MvcInf
         wm.resize(k);
         pieceAlone(pp, f, wp.data());
         pieceAlone(pm, f, wm.data());
-        for (std::size_t i = 0; i < k; ++i) {
-          const double gp = wp[i] / hp, gm = wm[i] / hm;
-          const double g = 0.5 * (gp + gm) + (h - 0.5 * (hp + hm)) * (gp - gm) / (hp - hm);
-          wt[i] = h * g;
-          if (!(hp > 0.0 && hm < 0.0 && std::isfinite(wt[i]))) wt[i] = 0.0;
-        }
+        for (std::size_t i = 0; i < k; ++i) wt[i] = planeBandContribution(h, hp, hm, wp[i], wm[i]);
       } else {
         pieceAlone(x, f, wt.data());
       }

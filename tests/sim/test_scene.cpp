@@ -462,6 +462,15 @@ TEST(Scene, GreenBodyFollowsItsPlacementAndSimilarities) {
   EXPECT_LT(worst, 1e-4);
 }
 
+// Saves the scene as dir/saved.json (dir emptied first) and returns the file's text.
+std::string saveInFreshFolder(const Scene& scene, const fs::path& dir) {
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  saveScene(scene, (dir / "saved.json").string());
+  std::ifstream in(dir / "saved.json");
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
 // A lattice body: its particles are the lattice's nodes (x fastest), its surface the outer
 // layer, its render mesh follows with the lattice's weights (the placed mesh at rest); it falls,
 // rests on the floor with its mesh just above it, and saves as a lattice.
@@ -502,13 +511,7 @@ TEST(Scene, LatticeBodyFromAMeshWithoutCage) {
   EXPECT_LT(fastest, 0.01);
 
   const fs::path dir = fs::temp_directory_path() / "softbody_lattice_scene";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  saveScene(scene, (dir / "saved.json").string());
-  const std::string saved = [&] {
-    std::ifstream in(dir / "saved.json");
-    return std::string(std::istreambuf_iterator<char>(in), {});
-  }();
+  const std::string saved = saveInFreshFolder(scene, dir);
   EXPECT_EQ(saved.find("\"mesh\""), std::string::npos) << saved;
   const Scene back = loadScene((dir / "saved.json").string());
   ASSERT_TRUE(back.bodies[0].lattice);
@@ -568,13 +571,7 @@ TEST(Scene, LatticeRegionClusters) {
     EXPECT_NEAR(restingExtent[a] / restExtent[a], 1.0, 0.05) << "axis " << a;
 
   const fs::path dir = fs::temp_directory_path() / "softbody_lattice_regions";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  saveScene(scene, (dir / "saved.json").string());
-  const std::string saved = [&] {
-    std::ifstream in(dir / "saved.json");
-    return std::string(std::istreambuf_iterator<char>(in), {});
-  }();
+  const std::string saved = saveInFreshFolder(scene, dir);
   EXPECT_NE(saved.find("\"kind\": \"lattice\""), std::string::npos) << saved;
   const Scene back = loadScene((dir / "saved.json").string());
   EXPECT_EQ(back.world.clusterDef(back.bodies[0].handle).clusters, def.clusters);
