@@ -1,7 +1,5 @@
 #include "sim/scene/body_embedding.h"
 
-#include <Eigen/Geometry>
-#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -12,26 +10,6 @@
 #include "sim/mesh/mesh_io.h"
 
 namespace sb {
-
-namespace {
-
-// The body's placement as the scene applies it to a mesh file's vertices, x = R (scale v) + t
-// (rotation about X, then Y, then Z, degrees): R here.
-Mat3 placementRotation(const SceneBody& b) {
-  const Vec3 r = b.rotationDegrees * (M_PI / 180.0);
-  return (Eigen::AngleAxisd(r.z(), Vec3::UnitZ()) * Eigen::AngleAxisd(r.y(), Vec3::UnitY()) *
-          Eigen::AngleAxisd(r.x(), Vec3::UnitX()))
-      .toRotationMatrix();
-}
-
-// A mesh path as written in the scene file, resolved against the scene file's folder.
-std::string resolveAgainstScene(const Scene& scene, const std::string& path) {
-  const std::filesystem::path p(path);
-  if (p.is_absolute() || scene.path.empty()) return path;
-  return (std::filesystem::path(scene.path).parent_path() / p).string();
-}
-
-}  // namespace
 
 void rebindRenderMesh(Scene& scene, int body, const cage::EmbeddingMethod& method,
                       const cage::BindOptions& options) {
@@ -68,8 +46,10 @@ void rebindRenderMesh(Scene& scene, int body, const cage::EmbeddingMethod& metho
   // would give other weights than the saved scene gets when it is opened again. The cage is the
   // body's start positions taken back through the placement (the cage file is not read again:
   // an automatic cage has none), exact to float rounding of the start positions.
-  const mesh::TriangleMesh file = mesh::readMesh(resolveAgainstScene(scene, b.render->path));
-  const Mat3 Rt = placementRotation(b).transpose();
+  const std::string baseDir =
+      scene.path.empty() ? "" : std::filesystem::path(scene.path).parent_path().string();
+  const mesh::TriangleMesh file = mesh::readMesh(resolveScenePath(baseDir, b.render->path));
+  const Mat3 Rt = eulerDegrees(b.rotationDegrees).transpose();
   const ConstPointsRef start = scene.world.restPositions(b.handle);
   mesh::TriangleMesh cage;
   cage.vertices.reserve(static_cast<std::size_t>(b.cageVertexCount));

@@ -133,23 +133,11 @@ class Fields {
   std::set<std::string> used_;
 };
 
-Mat3 eulerDegrees(const Vec3& deg) {
-  const Vec3 r = deg * (M_PI / 180.0);
-  return (Eigen::AngleAxisd(r.z(), Vec3::UnitZ()) * Eigen::AngleAxisd(r.y(), Vec3::UnitY()) *
-          Eigen::AngleAxisd(r.x(), Vec3::UnitX()))
-      .toRotationMatrix();
-}
-
 std::string cacheDirectory() {
   if (const char* env = std::getenv("SOFTBODY_CACHE_DIR")) return env;
   if (const char* xdg = std::getenv("XDG_CACHE_HOME")) return std::string(xdg) + "/softbody";
   if (const char* home = std::getenv("HOME")) return std::string(home) + "/.cache/softbody";
   return "";
-}
-
-std::string resolve(const std::string& baseDir, const std::string& path) {
-  const fs::path p(path);
-  return p.is_absolute() || baseDir.empty() ? path : (fs::path(baseDir) / p).string();
 }
 
 // Offsets and coordinates of colliders.
@@ -288,7 +276,7 @@ mesh::TriangleMesh readMeshField(Fields& f, const std::string& field, const std:
                                  const std::string& baseDir) {
   mesh::TriangleMesh m;
   try {
-    m = mesh::readMesh(resolve(baseDir, path));
+    m = mesh::readMesh(resolveScenePath(baseDir, path));
   } catch (const std::exception& e) {
     f.fail(field, e.what());
   }
@@ -415,7 +403,8 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMe
   // Particles: the vertices of the mesh file or of the automatic cage, scaled, rotated and placed.
   mesh::TriangleMesh mesh, detail;
   // The method is part of the key: the same pair bound two ways is two embeddings.
-  std::array<std::string, 3> renderKey{resolve(baseDir, sb.meshPath), resolve(baseDir, renderPath),
+  std::array<std::string, 3> renderKey{resolveScenePath(baseDir, sb.meshPath),
+                                       resolveScenePath(baseDir, renderPath),
                                        renderPath + "\n" + embeddingText(sb.embedding)};
   if (sb.lattice) {
     detail = readMeshField(f, renderField, renderPath, baseDir);
@@ -996,6 +985,18 @@ bool isShippedScene(const std::string& path) {
   if (ec) return false;
   const fs::path file = fs::weakly_canonical(fs::absolute(path, ec), ec);
   return !ec && file.parent_path() == folder;
+}
+
+Mat3 eulerDegrees(const Vec3& degrees) {
+  const Vec3 r = degrees * (M_PI / 180.0);
+  return (Eigen::AngleAxisd(r.z(), Vec3::UnitZ()) * Eigen::AngleAxisd(r.y(), Vec3::UnitY()) *
+          Eigen::AngleAxisd(r.x(), Vec3::UnitX()))
+      .toRotationMatrix();
+}
+
+std::string resolveScenePath(const std::string& baseDir, const std::string& path) {
+  const fs::path p(path);
+  return p.is_absolute() || baseDir.empty() ? path : (fs::path(baseDir) / p).string();
 }
 
 std::string defaultScenePath() {

@@ -137,6 +137,13 @@ struct Scene {
 // regular file of at most 64 MB (sim/base/file_io.h: folders, FIFOs and devices are refused);
 // its meshes are read by sim/mesh/mesh_io.h (512 MB each), bind caches by sim/cage/embedding.h.
 Scene loadScene(const std::string& path);
+// The rotation of a placement given as Euler angles in degrees (a body's or collider's
+// "rotationDegrees", SceneBody::rotationDegrees): about X, then Y, then Z. A body's particles
+// are R · (scale · v) + translation for the vertices v of its mesh file.
+Mat3 eulerDegrees(const Vec3& degrees);
+// A mesh path as written in a scene file, resolved against baseDir (the scene file's folder;
+// empty: as written). Absolute paths are returned as they are.
+std::string resolveScenePath(const std::string& baseDir, const std::string& path);
 // Parses a scene from JSON text; `name` is used in messages and `baseDir` resolves mesh paths.
 // Strict JSON: a key given twice in one object, a number beyond double range or an integer
 // index beyond int range is an error naming the line and the field (bodies[2].scale).
