@@ -13,6 +13,7 @@
 #include <limits>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -140,12 +141,20 @@ inline int parseCount(string_view token, const std::string& what) {
 inline void addFace(TriangleMesh& mesh, const std::vector<int>& face, const std::string& where) {
   const size_t k = face.size();
   if (k >= 4) {
-    for (size_t a = 0; a < k; ++a)
-      for (size_t b = a + 1; b < k; ++b)
-        if (face[a] == face[b])
-          fail(where + "a polygon repeats a corner: corners " + std::to_string(a + 1) + " and " +
-               std::to_string(b + 1) + " of " + std::to_string(k) +
-               " are the same vertex (corners must be distinct)");
+    // Sorted (vertex, corner) pairs: a repeat is two neighbours, found in O(k log k) (a file may
+    // hold one polygon of millions of corners). Reported: the first corner that repeats, with
+    // its next occurrence.
+    std::vector<std::pair<int, size_t>> byVertex(k);
+    for (size_t c = 0; c < k; ++c) byVertex[c] = {face[c], c};
+    std::sort(byVertex.begin(), byVertex.end());
+    std::pair<size_t, size_t> repeat{k, k};
+    for (size_t c = 1; c < k; ++c)
+      if (byVertex[c].first == byVertex[c - 1].first)
+        repeat = std::min(repeat, std::make_pair(byVertex[c - 1].second, byVertex[c].second));
+    if (repeat.first < k)
+      fail(where + "a polygon repeats a corner: corners " + std::to_string(repeat.first + 1) +
+           " and " + std::to_string(repeat.second + 1) + " of " + std::to_string(k) +
+           " are the same vertex (corners must be distinct)");
     // Newell's vector: twice the vector area of the polygon, planar or not.
     Eigen::Vector3d area = Eigen::Vector3d::Zero();
     double longest = 0.0;

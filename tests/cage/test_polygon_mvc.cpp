@@ -515,6 +515,25 @@ TEST(PolygonCage, BrokenPolygonsNameFileAndLine) {
   } catch (const mesh::MeshError& e) {
     EXPECT_NE(std::string(e.what()).find("line 7"), std::string::npos) << e.what();
   }
+  {  // one polygon of 200,000 corners on a circle, its last corner repeating its 7th: found
+     // (sorted, not compared pairwise) with the first corner that repeats
+    constexpr int kCorners = 200000;
+    std::string text;
+    for (int c = 0; c < kCorners; ++c) {
+      const double a = 2.0 * M_PI * c / kCorners;
+      text += "v " + std::to_string(std::cos(a)) + " " + std::to_string(std::sin(a)) + " 0\n";
+    }
+    text += "f";
+    for (int c = 1; c < kCorners; ++c) text += " " + std::to_string(c);
+    text += " 7\n";
+    try {
+      readObj(text);
+      FAIL() << "a repeated corner was accepted";
+    } catch (const mesh::MeshError& e) {
+      EXPECT_NE(std::string(e.what()).find("corners 7 and 200000 of 200000"), std::string::npos)
+          << std::string(e.what()).substr(0, 300);
+    }
+  }
   try {  // all four corners on a line
     readObj("v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nf 1 2 3 4\n");
     FAIL() << "a degenerate quad was accepted";
