@@ -66,9 +66,22 @@ finish_viewer() {
 }
 
 # click_widget STATS NAME: a real mouse click on a panel control recorded in the stats file.
+# widget_point STATS NAME: prints the click point of a recorded control. The stats of a frame
+# list the controls its panel drew, and the panel is drawn before the frame's changes apply (a
+# re-bind, a removed body), so a control that a change brings appears a frame later: waits up
+# to 30 frames for it.
+widget_point() {
+  local tries=0
+  until "$CHECK" click-point "$1" "$2" 2>/dev/null; do
+    tries=$((tries + 1))
+    [ "$tries" -le 10 ] || fail "control $2 not found in $1"
+    next_frames "$1" 3
+  done
+}
+
 click_widget() {
   local x y
-  read -r x y < <("$CHECK" click-point "$1" "$2") || fail "control $2 not found in $1"
+  read -r x y < <(widget_point "$1" "$2") || fail "control $2 not found in $1"
   xdotool mousemove "$x" "$y"
   sleep 0.15
   xdotool click 1
@@ -90,7 +103,7 @@ replace_text() {
 # field), replace its text with TEXT and press Enter.
 ctrl_click_type() {
   local x y
-  read -r x y < <("$CHECK" click-point "$1" "$2") || fail "control $2 not found in $1"
+  read -r x y < <(widget_point "$1" "$2") || fail "control $2 not found in $1"
   xdotool mousemove "$x" "$y"
   sleep 0.15
   xdotool keydown ctrl
