@@ -55,7 +55,8 @@ struct BodyView {
   // method whenever it changes or a switch is refused.
   int editResolution = 32;
   float editShape = 1.0f;
-  std::string embeddingError;  // the last refused switch, shown under the control
+  std::string embeddingError;       // the last refused switch, shown under the control
+  bool showEmbeddingError = false;  // scroll the panel to the error once, when it is new
   // Fold tint (viewer_folds.cpp): triangles touching a render vertex near a folded sample,
   // drawn again over the body in the fold colour.
   std::vector<std::int32_t> tintTriangles;  // #T×3 flat

@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <string>
+#include <utility>
 
 #include <imgui.h>
 
@@ -154,6 +155,8 @@ void ViewerApp::drawEmbeddingControls(int body) {
     ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1.0f, 0.4f, 0.35f, 1.0f));
     ImGui::TextWrapped("%s", v.embeddingError.c_str());
     ImGui::PopStyleColor();
+    // A new refusal is brought into view: the body's controls often end below the window.
+    if (std::exchange(v.showEmbeddingError, false)) ImGui::SetScrollHereY(1.0f);
     recordWidget(("embeddingError" + id).c_str());
   }
 }
@@ -183,11 +186,17 @@ void ViewerApp::applyEmbeddingRequest() {
     std::printf("softbody: %s\n", text);
     switched = true;
   } catch (const std::exception& e) {
-    v.embeddingError = "cannot bind with " + describe(r.method) + ": " + e.what() + " (kept " +
-                       describe(old) + ")";
+    // The reason without the body's name where the scene library put it first: the panel shows
+    // it under the body's own controls, the status bar adds the name once.
+    std::string reason = e.what();
+    if (reason.rfind(name + ": ", 0) == 0) reason.erase(0, name.size() + 2);
+    v.embeddingError =
+        "cannot bind with " + describe(r.method) + ": " + reason + " (kept " + describe(old) + ")";
+    v.showEmbeddingError = true;
     std::fprintf(stderr, "softbody: %s: %s\n", name.c_str(), v.embeddingError.c_str());
-    // Also in the status bar: the body's panel may be scrolled below the window's edge.
+    // Also in the status bar, which no longer reports the earlier switch as the latest news.
     errorMessage_ = name + ": " + v.embeddingError;
+    statusMessage_.clear();
   }
   syncEmbeddingEdits(r.body);
   // The fold watch samples the map with the body's method: watch this body again with its new

@@ -6,8 +6,8 @@
 # 339 samples in `softbody run --fold-check` at 2 s).
 #  1. The embedding combo of body 0 switches it from mvc to harmonic: the stats report the new
 #     method and the weights in use (boundKind) are harmonic too.
-#  2. A refused switch (a resolution typed out of range) shows the error and keeps the old
-#     binding.
+#  2. A refused switch (a resolution typed out of range) shows the error, scrolled into view and
+#     naming the body once, and keeps the old binding.
 #  3. The fold check names body 1 with its folded samples, and the screenshot shows the fold
 #     tint on body 1 (none before the check was ticked).
 #  4. A surface drag on the lattice body moves it with a point constraint over the lattice
@@ -82,6 +82,13 @@ case "$error" in *resolution*) ;; *) fail "the error does not name the resolutio
 [ "$(get /bodies/0/embedding/method)" = harmonic ] || fail "the refused bind changed the method"
 [ "$(get /bodies/0/embedding/resolution)" = 32 ] || fail "the refused bind changed the resolution"
 [ "$(get /bodies/0/embedding/boundKind)" = harmonic ] || fail "the refused bind changed the weights"
+# The status bar names the body once; the panel, under the body's own controls, not at all.
+[ "$(get /error)" = "switch: $error" ] || fail "the status bar says '$(get /error)'"
+case "$error" in *switch*) fail "the panel's error repeats the body's name: $error" ;; esac
+# The panel scrolled the error into view: its last line ends inside the window (720 px).
+next_frames "$live" 3
+bottom=$(get /widgets/embeddingError0/3)
+[ "${bottom%.*}" -le 720 ] || fail "the error ends at y = $bottom, below the window"
 screenshot "$WORK/refused"
 
 # ---- 3. the fold check: body 1 folds, the panel warns, the mesh is tinted ----
