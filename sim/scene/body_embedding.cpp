@@ -1,7 +1,6 @@
 #include "sim/scene/body_embedding.h"
 
 #include <cstdio>
-#include <filesystem>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -46,9 +45,8 @@ void rebindRenderMesh(Scene& scene, int body, const cage::EmbeddingMethod& metho
   // would give other weights than the saved scene gets when it is opened again. The cage is the
   // body's start positions taken back through the placement (the cage file is not read again:
   // an automatic cage has none), exact to float rounding of the start positions.
-  const std::string baseDir =
-      scene.path.empty() ? "" : std::filesystem::path(scene.path).parent_path().string();
-  const mesh::TriangleMesh file = mesh::readMesh(resolveScenePath(baseDir, b.render->path));
+  const mesh::TriangleMesh file =
+      mesh::readMesh(resolveScenePath(scene.meshFolder, b.render->path));
   const Mat3 Rt = eulerDegrees(b.rotationDegrees).transpose();
   const ConstPointsRef start = scene.world.restPositions(b.handle);
   mesh::TriangleMesh cage;

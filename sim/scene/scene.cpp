@@ -661,6 +661,7 @@ Scene parseScene(const std::string& text, const std::string& name, const std::st
     w.rejectUnknown();
   }
   Scene scene;
+  scene.meshFolder = baseDir;
   scene.keyOrder = std::move(keyOrder);
   scene.world = World(settings);
   if (top.has("colliders")) {
@@ -696,6 +697,10 @@ Scene parseScene(const std::string& text, const std::string& name, const std::st
   return scene;
 }
 
+namespace {
+std::string rebase(const std::string& path, const std::string& fromDir, const std::string& toDir);
+}  // namespace
+
 int addSceneBody(Scene& scene, const std::string& bodyJson, const std::string& name,
                  const std::string& baseDir) {
   const json root = parseJson(bodyJson, name);
@@ -703,6 +708,12 @@ int addSceneBody(Scene& scene, const std::string& bodyJson, const std::string& n
   BodyDef def;
   BoundMeshes bound;
   SceneBody body = parseBody(f, baseDir, def, bound);
+  // Its paths as the rest of the scene writes them: against the scene's mesh folder.
+  if (baseDir != scene.meshFolder) {
+    if (!body.meshPath.empty()) body.meshPath = rebase(body.meshPath, baseDir, scene.meshFolder);
+    if (body.render)  // its own: `bound` above shares meshes within this call only
+      body.render->path = rebase(body.render->path, baseDir, scene.meshFolder);
+  }
   try {
     body.handle = scene.world.addBody(def);
   } catch (const std::invalid_argument& e) {
@@ -726,7 +737,7 @@ Scene loadScene(const std::string& path) {
     throw SceneError(e.what());
   }
   Scene scene = parseScene(text, path, fs::path(path).parent_path().string());
-  scene.path = path;
+  scene.path = path;  // parseScene set meshFolder to its folder
   return scene;
 }
 
@@ -897,7 +908,7 @@ ordered_json inFileOrder(const ordered_json& j, const std::string& kind,
 
 std::string sceneText(const Scene& scene, const std::string& path) {
   const World& w = scene.world;
-  const std::string fromDir = fs::path(scene.path).parent_path().string();
+  const std::string& fromDir = scene.meshFolder;
   const std::string toDir = fs::path(path).parent_path().string();
   const WorldSettings& s = w.settings();
   ordered_json root;

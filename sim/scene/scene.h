@@ -109,7 +109,10 @@ struct SceneBody {
 using SceneKeyOrder = std::map<std::string, std::vector<std::string>>;
 
 struct Scene {
-  std::string path;        // the file it was loaded from, or empty
+  std::string path;  // the file it was loaded from, or empty
+  // The folder its relative mesh paths (SceneBody::meshPath, RenderMesh::path) are written
+  // against: the scene file's (loadScene) or parseScene's baseDir; empty: the working folder.
+  std::string meshFolder;
   SceneKeyOrder keyOrder;  // of that file (empty: the shipped scenes' order)
   World world;
   std::vector<SceneBody> bodies;  // in file order; handles refer into world
@@ -144,13 +147,15 @@ Mat3 eulerDegrees(const Vec3& degrees);
 // A mesh path as written in a scene file, resolved against baseDir (the scene file's folder;
 // empty: as written). Absolute paths are returned as they are.
 std::string resolveScenePath(const std::string& baseDir, const std::string& path);
-// Parses a scene from JSON text; `name` is used in messages and `baseDir` resolves mesh paths.
+// Parses a scene from JSON text; `name` is used in messages and `baseDir` resolves mesh paths
+// (it becomes the scene's meshFolder).
 // Strict JSON: a key given twice in one object, a number beyond double range or an integer
 // index beyond int range is an error naming the line and the field (bodies[2].scale).
 Scene parseScene(const std::string& jsonText, const std::string& name, const std::string& baseDir);
 // Adds one body to the scene, given as the JSON text of a body object of a scene file (the same
-// fields, defaults and checks; relative mesh paths resolved against baseDir). Returns its index
-// in scene.bodies. Throws SceneError ("NAME: FIELD: REASON"); the scene is unchanged then.
+// fields, defaults and checks; relative mesh paths resolved against baseDir, and kept relative
+// to the scene's meshFolder). Returns its index in scene.bodies. Throws SceneError ("NAME:
+// FIELD: REASON"); the scene is unchanged then.
 int addSceneBody(Scene& scene, const std::string& bodyJson, const std::string& name,
                  const std::string& baseDir);
 // Removes body i from the scene and its World; the bodies after it move down one index.

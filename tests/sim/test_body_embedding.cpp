@@ -107,6 +107,32 @@ TEST(BodyEmbedding, RefusalKeepsTheOldBinding) {
   EXPECT_THROW(rebindRenderMesh(scene, 3, harmonic(8)), std::out_of_range);
 }
 
+// A scene parsed from text keeps its paths relative to the folder it was given: a switch reads
+// the render mesh from there (not from the working folder), a body added from another folder
+// is written against the same folder, and a save elsewhere rebases both.
+TEST(BodyEmbedding, RelativePathsOfAParsedSceneResolveAgainstItsFolder) {
+  const std::string scenes = kAssets + "/scenes";
+  Scene scene = parseScene(
+      R"({"bodies": [{"name": "a", "mesh": "../meshes/suzanne_cage.obj",
+                      "renderMesh": "../meshes/suzanne.obj"}]})",
+      "relative.json", scenes);
+  EXPECT_EQ(scene.meshFolder, scenes);
+  ASSERT_NO_THROW(rebindRenderMesh(scene, 0, harmonic(8)));
+  EXPECT_EQ(scene.bodies[0].render->path, "../meshes/suzanne.obj");
+
+  const int added = addSceneBody(
+      scene, R"({"name": "b", "mesh": "suzanne_cage.obj", "renderMesh": "suzanne.obj"})", "b",
+      kAssets + "/meshes");
+  EXPECT_EQ(scene.bodies[size_t(added)].meshPath, "../meshes/suzanne_cage.obj");
+  EXPECT_EQ(scene.bodies[size_t(added)].render->path, "../meshes/suzanne.obj");
+  ASSERT_NO_THROW(rebindRenderMesh(scene, added, harmonic(8)));
+
+  // Saved beside the meshes: both bodies name them from there.
+  const std::string saved = sceneText(scene, kAssets + "/meshes/x.json");
+  EXPECT_EQ(saved.find("../meshes/"), std::string::npos) << saved;
+  EXPECT_NE(saved.find(R"("renderMesh": "suzanne.obj")"), std::string::npos) << saved;
+}
+
 // Mirror body `body` through its centre (turns its map inside out: every sample folds).
 void mirror(Scene& scene, int body) {
   const BodyHandle h = scene.bodies[size_t(body)].handle;
