@@ -499,6 +499,24 @@ int stack() {
     w.step();
     const Vec3 d = w.centreOfMass(hs.back()) - c0.back();
     worst = std::max(worst, std::hypot(d.x(), d.z()));
+    if (num("trace", 0) > 0 && w.time() >= num("trace", 0) && w.time() < num("trace", 0) + 0.25) {
+      // Every step for 0.25 s: each body's centre velocity and spin, and the deepest contact.
+      std::printf("%7.4f deepest %.3g", w.time(), w.lastDeepestContact());
+      for (auto h : hs) {
+        const Vec3 vc = w.linearMomentum(h) / w.mass(h);
+        const Vec3 c = w.centreOfMass(h);
+        Mat3 I = Mat3::Zero();
+        const Eigen::VectorXf m = w.masses(h);
+        for (int i = 0; i < int(m.size()); ++i) {
+          const Vec3 r = w.positions(h).row(i).cast<double>().transpose() - c;
+          I += m[i] * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
+        }
+        const Vec3 om = I.ldlt().solve(w.angularMomentum(h, c));
+        std::printf(" | v %+.2e %+.2e %+.2e w %+.2e %+.2e %+.2e vmax %.2e", vc.x(), vc.y(), vc.z(),
+                    om.x(), om.y(), om.z(), w.velocities(h).rowwise().norm().maxCoeff());
+      }
+      std::printf("\n");
+    }
     if (k % every == 0 || k == steps) {
       std::printf("%6.2f %10.4g (%.3f%% of L) %+.4g %10.4g %10.4g %d  dx %+.3g dz %+.3g", w.time(),
                   std::hypot(d.x(), d.z()), 100 * std::hypot(d.x(), d.z()) / L, d.y(), maxSpeed(w),
@@ -760,10 +778,30 @@ int sceneRun() {
       if (num("bodies", 0) > 0)  // every body: asleep, centre, lowest particle, fastest particle
         for (BodyHandle b : bs) {
           const Vec3 c = w.centreOfMass(b);
-          std::printf("    %-12s %s c (%.3f %.3f %.3f) lowest %.3f fastest %.3g\n",
-                      w.name(b).c_str(), w.isSleeping(b) ? "asleep" : "awake ", c.x(), c.y(), c.z(),
+          std::printf("    %-12s %s c (%.3f %.3f %.3f) lowest %.3f fastest %.3g", w.name(b).c_str(),
+                      w.isSleeping(b) ? "asleep" : "awake ", c.x(), c.y(), c.z(),
                       w.positions(b).col(1).minCoeff(),
                       w.velocities(b).rowwise().norm().maxCoeff());
+          if (num("energy", 0) > 0) {  // kinetic energy split: centre, rigid spin, the rest
+            const Eigen::VectorXf m = w.masses(b);
+            const auto x = w.positions(b);
+            const auto u = w.velocities(b);
+            const double M = w.mass(b);
+            const Vec3 vc = w.linearMomentum(b) / M;
+            Mat3 I = Mat3::Zero();
+            double ke = 0;
+            for (int i = 0; i < int(m.size()); ++i) {
+              const Vec3 r = x.row(i).cast<double>().transpose() - c;
+              I += m[i] * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
+              ke += 0.5 * m[i] * u.row(i).cast<double>().squaredNorm();
+            }
+            const Vec3 L = w.angularMomentum(b, c);
+            const double lin = 0.5 * M * vc.squaredNorm();
+            const double rot = 0.5 * L.dot(I.ldlt().solve(L));
+            std::printf(" KE lin %.3g rot %.3g def %.3g; E %.5g", lin, rot, ke - lin - rot,
+                        ke + M * 9.81 * c.y());
+          }
+          std::printf("\n");
         }
     }
   }
