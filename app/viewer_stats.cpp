@@ -207,6 +207,10 @@ bool ViewerApp::writeStats(const std::string& path) const {
       if (f.body == static_cast<int>(i)) foldedSamples = f.report.folded;
     b["foldedSamples"] = foldedSamples;
     b["centre"] = {c.x(), c.y(), c.z()};
+    // Where the body was placed (the mean of its start positions): lets a test see a fall that
+    // ended before it first looked.
+    const Eigen::RowVector3f start = scene_.world.restPositions(sceneBody.handle).colwise().mean();
+    b["startCentre"] = {start.x(), start.y(), start.z()};
     const ScreenBox& box = pick[i].meshBox;
     b["screenBounds"] = {box.lo.x, box.lo.y, box.hi.x, box.hi.y};
     glm::vec2 centrePixel(-1.0f);

@@ -28,7 +28,9 @@ echo "status: $status"
 case "$status" in *"automatic cage"*) ;; *) fail "the status does not say the body got an automatic cage" ;; esac
 
 # It falls onto the scene and comes to rest above the ground.
-y0=$("$CHECK" get "$live" /bodies/$n0/centre | cut -d' ' -f2)
+# Its start height: where it was placed (it may have landed before the first look, on a loaded
+# machine).
+y0=$("$CHECK" get "$live" /bodies/$n0/startCentre | cut -d' ' -f2)
 next_frames "$live" 300
 y1=$("$CHECK" get "$live" /bodies/$n0/centre | cut -d' ' -f2)
 next_frames "$live" 60
