@@ -30,6 +30,7 @@
 //   floor in one pass.
 #pragma once
 
+#include <limits>
 #include <vector>
 
 #include "sim/base/types.h"
@@ -126,12 +127,27 @@ struct ContactPoint {
   float inverseMass[2][3] = {{0, 0, 0}, {0, 0, 0}};
   float tangentCoupling[2] = {0, 0};
   float pointInverseMass = 0;
+  // Whether the bodies' rigid motions approach here no faster than the settings' restingSpeed:
+  // a resting contact, where both constraints move soft bodies as a whole (B too), so a
+  // particle's jitter is not answered by that particle alone. Answered alone, a resting
+  // particle pushed out of its body's goal was pulled back in by shape matching in the next
+  // sub-step, over and over, and the friction of those pushes walked soft stacks (five linear
+  // boxes at α 0.9, sleep off: top drift 4–33 % of the edge in 20 s, now 0.07–0.4 %;
+  // docs/design.md §5.5). Impacts keep B on the particle: it is what dents a soft body.
+  bool resting = false;
+  // `resting` of the sub-step the warm start's impulses come from: where it changed on a soft
+  // body, B's impulse was found for the whole body and would land on one particle (or the other
+  // way round), so B starts cold.
+  bool warmResting = false;
 };
 
 struct ContactSolverSettings {
   float h = 0;                        // sub-step (s)
   float restitutionThreshold = 1.0f;  // m/s: slower approaches do not bounce
-  Vec3f up = Vec3f::UnitY();          // against gravity (shock propagation order); zero: none
+  // m/s: contacts whose rigid approach is at most this are resting (ContactPoint::resting);
+  // −∞: none.
+  float restingSpeed = -std::numeric_limits<float>::infinity();
+  Vec3f up = Vec3f::UnitY();  // against gravity (shock propagation order); zero: none
 };
 
 // Solves one island: the bodies `bodyList` (indices into bodies, prepared) and the contacts
