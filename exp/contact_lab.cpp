@@ -518,9 +518,10 @@ int stack() {
       std::printf("\n");
     }
     if (k % every == 0 || k == steps) {
-      std::printf("%6.2f %10.4g (%.3f%% of L) %+.4g %10.4g %10.4g %d  dx %+.3g dz %+.3g", w.time(),
-                  std::hypot(d.x(), d.z()), 100 * std::hypot(d.x(), d.z()) / L, d.y(), maxSpeed(w),
-                  kinetic(w), sleepingCount(w), d.x(), d.z());
+      std::printf(
+          "%6.2f %10.4g (%.3f%% of L) %+.4g %10.4g %10.4g %d deepest %.3g dx %+.3g dz %+.3g",
+          w.time(), std::hypot(d.x(), d.z()), 100 * std::hypot(d.x(), d.z()) / L, d.y(),
+          maxSpeed(w), kinetic(w), sleepingCount(w), w.lastDeepestContact(), d.x(), d.z());
       if (num("all", 0) > 0)
         for (size_t i = 0; i < hs.size(); ++i) {
           const Vec3 di = w.centreOfMass(hs[i]) - c0[i];
