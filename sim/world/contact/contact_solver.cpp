@@ -217,10 +217,10 @@ float rigidApproach(const Side& p, const Side& o, const Vec3f& n) {
 void prepareContact(std::vector<SolverBody>& bodies, ContactPoint& c,
                     const ContactSolverSettings& settings) {
   const float h = settings.h;
-  c.resting = rigidApproach(probeSide(bodies, c), obstacleSide(bodies, c), c.normal) <=
-                  settings.restingSpeed &&
-              c.distance0 >= -kRestingDepth * bodies[size_t(c.probe)].spacing;
-  const Side p = probeSide(bodies, c), o = obstacleSide(bodies, c);
+  Side p = probeSide(bodies, c), o = obstacleSide(bodies, c);
+  c.resting = rigidApproach(p, o, c.normal) <= settings.restingSpeed &&
+              c.distance0 >= -kRestingDepth * p.body->spacing;
+  p.resting = o.resting = c.resting;
   c.leverProbe = leverArm(p);
   c.leverObstacle = leverArm(o);
   const Vec3f& n = c.normal;

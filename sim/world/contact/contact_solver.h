@@ -18,7 +18,8 @@
 //   measures): A, split between the particle (1 − s) and the body's rigid motion (s, as a rigid
 //   body with the body's mass and inertia), measures (1 − s)·v_p + s·(V + ω × r) with V, ω the
 //   momentum-fitted rigid velocity; B measures the particle alone and acts on it alone. Rigid
-//   bodies (s = 1) answer B as a whole too, so they stay rigid.
+//   bodies (s = 1) answer B as a whole too, so they stay rigid, and so does every body in a
+//   resting contact (ContactPoint::resting: B on the lone particle there rocked soft stacks).
 // - Impulses are accumulated over the sweeps and clamped as totals (λ ≥ 0, friction within
 //   μ·λ): clamping each visit apart let the first-visited contacts take all the load, the body
 //   rocked in particle order and friction turned the rocking into a walk. Warm started from the
@@ -127,13 +128,14 @@ struct ContactPoint {
   float inverseMass[2][3] = {{0, 0, 0}, {0, 0, 0}};
   float tangentCoupling[2] = {0, 0};
   float pointInverseMass = 0;
-  // Whether the bodies' rigid motions approach here no faster than the settings' restingSpeed:
-  // a resting contact, where both constraints move soft bodies as a whole (B too), so a
-  // particle's jitter is not answered by that particle alone. Answered alone, a resting
-  // particle pushed out of its body's goal was pulled back in by shape matching in the next
-  // sub-step, over and over, and the friction of those pushes walked soft stacks (five linear
-  // boxes at α 0.9, sleep off: top drift 4–33 % of the edge in 20 s, now 0.07–0.4 %;
-  // docs/design.md §5.5). Impacts keep B on the particle: it is what dents a soft body.
+  // Whether the bodies' rigid motions approach here no faster than the settings' restingSpeed
+  // and the particle is at most kRestingDepth deep: a resting contact, where B acts on the
+  // bodies' rigid motion (as for rigid bodies) instead of the particle alone, so a particle's
+  // jitter is not answered by that particle alone. Answered alone, a resting particle pushed
+  // out of its body's goal was pulled back in by shape matching in the next sub-step, over and
+  // over, and those pushes rocked and walked soft stacks (five boxes at α 0.9, sleep off: top
+  // drift 0.8–33 % of the edge in 20 s, now 0.03–0.2 %; docs/design.md §5.5). Impacts keep B on
+  // the particle: it is what dents a soft body.
   bool resting = false;
   // `resting` of the sub-step the warm start's impulses come from: where it changed on a soft
   // body, B's impulse was found for the whole body and would land on one particle (or the other
