@@ -634,6 +634,16 @@ json parseJson(const std::string& text, const std::string& name,
   return root;
 }
 
+// A path as written in the scene, re-expressed relative to another folder (a saved file's, or
+// the scene's mesh folder for an added body).
+std::string rebase(const std::string& path, const std::string& fromDir, const std::string& toDir) {
+  if (fs::path(path).is_absolute()) return path;
+  const fs::path absolute = fs::absolute(fs::path(fromDir.empty() ? "." : fromDir) / path);
+  std::error_code ec;
+  const fs::path rel = fs::relative(absolute, fs::absolute(toDir.empty() ? "." : toDir), ec);
+  return ec || rel.empty() ? absolute.string() : rel.string();
+}
+
 }  // namespace
 
 Scene parseScene(const std::string& text, const std::string& name, const std::string& baseDir) {
@@ -697,10 +707,6 @@ Scene parseScene(const std::string& text, const std::string& name, const std::st
   return scene;
 }
 
-namespace {
-std::string rebase(const std::string& path, const std::string& fromDir, const std::string& toDir);
-}  // namespace
-
 int addSceneBody(Scene& scene, const std::string& bodyJson, const std::string& name,
                  const std::string& baseDir) {
   const json root = parseJson(bodyJson, name);
@@ -751,15 +757,6 @@ using ordered_json = nlohmann::ordered_json;
 
 ordered_json vec(const Vec3& v) {
   return ordered_json::array({v.x(), v.y(), v.z()});
-}
-
-// A path as written in the scene, re-expressed relative to the folder of the file being saved.
-std::string rebase(const std::string& path, const std::string& fromDir, const std::string& toDir) {
-  if (fs::path(path).is_absolute()) return path;
-  const fs::path absolute = fs::absolute(fs::path(fromDir.empty() ? "." : fromDir) / path);
-  std::error_code ec;
-  const fs::path rel = fs::relative(absolute, fs::absolute(toDir.empty() ? "." : toDir), ec);
-  return ec || rel.empty() ? absolute.string() : rel.string();
 }
 
 // JSON text as people write scene files: two-space indents, and arrays of numbers, strings or
