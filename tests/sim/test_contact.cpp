@@ -115,11 +115,13 @@ double deepestInside(const World& w, BodyHandle a, BodyHandle b,
   return deepest;
 }
 
-// Gravity, 1/60 s in four sub-steps, a floor at y = 0 with friction 0.6.
-World floorWorld() {
+// Gravity, 1/60 s in four sub-steps, a floor at y = 0 with friction 0.6; sleep as asked (off:
+// the tests watch the motion itself, not a sleeping body).
+World floorWorld(bool sleep = true) {
   WorldSettings settings;
   settings.timeStep = 1.0 / 60;
   settings.substeps = 4;
+  settings.sleep = sleep;
   World world(settings);
   world.addCollider(Collider::plane(Vec3::UnitY(), 0.0, 0.6));
   return world;
@@ -422,10 +424,7 @@ TEST(Contact, SoftBodiesReboundESquaredOfTheirFall) {
   for (Mode mode : {Mode::Rigid, Mode::Linear, Mode::Quadratic})
     for (double alpha : {0.3, 0.9})
       for (double e : {0.0, 0.5, 0.9}) {
-        World world = floorWorld();
-        WorldSettings awake = world.settings();
-        awake.sleep = false;
-        world.setSettings(awake);
+        World world = floorWorld(/*sleep=*/false);
         BodyDef def =
             bodyFrom(onFloorAt(cubeSurface(0.4, 3, Vec3::Zero()), fall), "box", mode, alpha);
         def.params.beta = 0.3;
@@ -487,10 +486,7 @@ TEST(Contact, SoftBodiesPartWithETimesTheirApproach) {
 // contacts themselves must hold the stack still (asleep, nothing would move and no contact
 // would be solved).
 TEST(Contact, StackSettlesWithoutJitter) {
-  World world = floorWorld();
-  WorldSettings awake = world.settings();
-  awake.sleep = false;
-  world.setSettings(awake);
+  World world = floorWorld(/*sleep=*/false);
   const Shape bottom = cubeSurface(1.0, 4, Vec3(0, 0.5, 0));
   const Shape top = cubeSurface(0.6, 4, Vec3(0.1, 1.6, 0.05));
   for (Mode mode : {Mode::Rigid, Mode::Linear, Mode::Quadratic}) {
@@ -527,10 +523,7 @@ TEST(Contact, StackSettlesWithoutJitter) {
 // and no energy from the separation: the fastest particle ever below 1 m/s (the push-out moves
 // positions at a bounded rate without velocity; measured at most 0.43 m/s) and still at the end.
 TEST(Contact, BodiesOverlappingByMoreThanHalfComeApart) {
-  World world = floorWorld();
-  WorldSettings awake = world.settings();
-  awake.sleep = false;
-  world.setSettings(awake);
+  World world = floorWorld(/*sleep=*/false);
   const double edge = 0.5;
   for (double overlap : {0.6, 0.9, 1.0})
     for (Mode mode : {Mode::Rigid, Mode::Linear}) {
@@ -566,10 +559,7 @@ TEST(Contact, BodiesOverlappingByMoreThanHalfComeApart) {
 // shipped scenes, 5 % of a spacing per interface), none moved sideways by more than 2 % of the
 // edge (5 mm with the slop), and the tower still at the end (fastest particle below 1 cm/s).
 TEST(Contact, TallTwistedStackStandsStill) {
-  World world = floorWorld();
-  WorldSettings awake = world.settings();
-  awake.sleep = false;
-  world.setSettings(awake);
+  World world = floorWorld(/*sleep=*/false);
   const double edge = 0.4, pitch = edge + 0.0015, turn = 7.0 * M_PI / 180.0;
   const int n = 10;
   std::vector<BodyHandle> boxes;
@@ -617,10 +607,7 @@ TEST(Contact, StiffSoftStackStandsWithSleepOff) {
   if (test_support::kSanitized) GTEST_SKIP() << "4,800 sub-steps of five bodies: GCC build only";
   for (Mode mode : {Mode::Linear, Mode::Quadratic}) {
     SCOPED_TRACE(mode == Mode::Linear ? "linear" : "quadratic");
-    World world = floorWorld();
-    WorldSettings awake = world.settings();
-    awake.sleep = false;
-    world.setSettings(awake);
+    World world = floorWorld(/*sleep=*/false);
     const double edge = 0.4, pitch = edge + 0.0015;
     const int n = 5;
     std::vector<BodyHandle> boxes;
@@ -664,10 +651,7 @@ TEST(Contact, StiffSoftStackStandsWithSleepOff) {
 // parameters). No particle may be faster than twice what the fall from the highest start can
 // give (a light particle hit by a heavy body takes at most twice its speed).
 TEST(Contact, VerySoftBodyUnderStifferOnesStaysBounded) {
-  World w = floorWorld();
-  WorldSettings awake = w.settings();
-  awake.sleep = false;
-  w.setSettings(awake);
+  World w = floorWorld(/*sleep=*/false);
   BodyDef goo =
       bodyFrom(onFloorAt(bunnyCage(0.07, Vec3::Zero()), 0.01), "goo", Mode::Linear, 0.005);
   goo.params.beta = 0.971;
@@ -712,10 +696,7 @@ TEST(Contact, VerySoftBodyUnderStifferOnesStaysBounded) {
 // longest test of CI by three times; the GCC and TSan builds still run it.
 TEST(Contact, BodyWithoutStiffnessUnderAPileStaysWithinItsReach) {
   if (test_support::kAddressSanitizer) GTEST_SKIP() << "433 s under ASan; run by the other builds";
-  World w = floorWorld();
-  WorldSettings awake = w.settings();
-  awake.sleep = false;
-  w.setSettings(awake);
+  World w = floorWorld(/*sleep=*/false);
   const Shape gooShape = onFloorAt(bunnyCage(0.07, Vec3::Zero()), 0.01);
   BodyDef goo = bodyFrom(gooShape, "goo", Mode::Linear, 0.0);
   goo.params.beta = 0.97;
