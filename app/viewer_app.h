@@ -63,6 +63,9 @@ struct BodyView {
   int tintedVertices = 0;
   std::unique_ptr<render::MeshBuffer> tint;
   bool tintUploaded = false;
+  // The triangle whose centroid gave the last --stats grab pixel (none: SIZE_MAX); the next write
+  // tries it first.
+  std::size_t grabTriangle = std::numeric_limits<std::size_t>::max();
 };
 
 // Rolling timing figures, milliseconds.
@@ -196,7 +199,8 @@ class ViewerApp {
 
   // ---- viewer_stats.cpp ----
   // Writes the stats file (atomically); false, with the reason on stderr, when it cannot.
-  bool writeStats(const std::string& path) const;
+  // Not const: it keeps each body's grab triangle for the next write (BodyView::grabTriangle).
+  bool writeStats(const std::string& path);
   // writeStats(options_.statsPath), its wall time added to statsMsSum_ (printed at exit).
   bool timedStatsWrite();
 

@@ -75,13 +75,4 @@ bool OrbitCamera::project(const glm::vec3& point, float width, float height,
                      pixel);
 }
 
-bool OrbitCamera::projectWith(const glm::mat4& viewProjection, const glm::vec3& point, float width,
-                              float height, glm::vec2* pixel) {
-  const glm::vec4 clip = viewProjection * glm::vec4(point, 1.0f);
-  if (clip.w <= 1e-6f) return false;
-  const glm::vec3 ndc = glm::vec3(clip) / clip.w;
-  *pixel = glm::vec2((ndc.x + 1.0f) * 0.5f * width, (1.0f - ndc.y) * 0.5f * height);
-  return true;
-}
-
 }  // namespace sb::render

@@ -41,9 +41,16 @@ class OrbitCamera {
   // Window pixel of a world point; returns false when it is behind the eye.
   bool project(const glm::vec3& point, float width, float height, glm::vec2* pixel) const;
   // The same for many points: viewProjection = projection(width / height) * view(), computed
-  // once by the caller (project() recomputes both matrices for every point).
+  // once by the caller (project() recomputes both matrices for every point). Inline: callers
+  // project every vertex of every drawn mesh with it (the --stats file's screen bounds).
   static bool projectWith(const glm::mat4& viewProjection, const glm::vec3& point, float width,
-                          float height, glm::vec2* pixel);
+                          float height, glm::vec2* pixel) {
+    const glm::vec4 clip = viewProjection * glm::vec4(point, 1.0f);
+    if (clip.w <= 1e-6f) return false;
+    const glm::vec3 ndc = glm::vec3(clip) / clip.w;
+    *pixel = glm::vec2((ndc.x + 1.0f) * 0.5f * width, (1.0f - ndc.y) * 0.5f * height);
+    return true;
+  }
 };
 
 }  // namespace sb::render

@@ -10,9 +10,9 @@ bool intersectRayTriangle(const Ray& ray, const glm::vec3& a, const glm::vec3& b
   const glm::vec3 e1 = b - a, e2 = c - a;
   const glm::vec3 p = glm::cross(ray.direction, e2);
   const float det = glm::dot(e1, p);
-  // Relative test: a parallel ray gives det ≈ 0 compared with the triangle's own scale.
-  const float scale = glm::length(e1) * glm::length(e2);
-  if (!(std::fabs(det) > 1e-7f * scale)) return false;
+  // Relative test: a parallel ray gives det ≈ 0 compared with the triangle's own scale
+  // |e1| |e2| (squared on both sides: no square roots in the loop over a mesh's triangles).
+  if (!(det * det > 1e-14f * glm::dot(e1, e1) * glm::dot(e2, e2))) return false;
   const float inv = 1.0f / det;
   const glm::vec3 s = ray.origin - a;
   const float uu = glm::dot(s, p) * inv;

@@ -31,7 +31,8 @@ void syncFile(const std::string& path) {
 
 }  // namespace
 
-AtomicFileWriter::AtomicFileWriter(std::string path) : path_(std::move(path)) {
+AtomicFileWriter::AtomicFileWriter(std::string path, Durability durability)
+    : path_(std::move(path)), durability_(durability) {
   static std::atomic<unsigned> counter{0};
   std::error_code ec;
   if (std::filesystem::is_directory(path_, ec))
@@ -58,14 +59,15 @@ void AtomicFileWriter::commit() {
   if (!out_) throw FileError(path_ + ": cannot write (disk full or I/O error)");
   out_.close();
   if (!out_) throw FileError(path_ + ": cannot write (disk full or I/O error)");
-  syncFile(tmp_);
+  if (durability_ == Durability::Synced) syncFile(tmp_);
   if (std::rename(tmp_.c_str(), path_.c_str()) != 0)
     throw FileError(path_ + ": cannot replace the file: " + errnoText());
   committed_ = true;
 }
 
-void writeFileAtomic(const std::string& path, const std::function<void(std::ostream&)>& write) {
-  AtomicFileWriter file(path);
+void writeFileAtomic(const std::string& path, const std::function<void(std::ostream&)>& write,
+                     Durability durability) {
+  AtomicFileWriter file(path, durability);
   write(file.stream());
   file.commit();
 }

@@ -34,6 +34,10 @@ TEST_F(FileIo, AtomicWriteReplacesTheFileWhole) {
   EXPECT_EQ(contents(p), "first");
   writeFileAtomic(p, [](std::ostream& out) { out << "second, longer"; });
   EXPECT_EQ(contents(p), "second, longer");
+  // Unsynced (the viewer's stats file) skips only the flush to the device: same replacement.
+  writeFileAtomic(
+      p, [](std::ostream& out) { out << "third"; }, Durability::Unsynced);
+  EXPECT_EQ(contents(p), "third");
   EXPECT_EQ(othersThan("a.txt"), 0);
 }
 
@@ -46,6 +50,11 @@ TEST_F(FileIo, AWriterThatFailsLeavesTheOldFileAndNoTemporary) {
                                  throw std::runtime_error("writer gave up");
                                }),
                std::runtime_error);
+  EXPECT_EQ(contents(p), "precious");
+  EXPECT_THROW(
+      writeFileAtomic(
+          p, [](std::ostream&) { throw std::runtime_error("gave up"); }, Durability::Unsynced),
+      std::runtime_error);
   EXPECT_EQ(contents(p), "precious");
   EXPECT_EQ(othersThan("keep.txt"), 0);
 }
