@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
+#include <future>
 #include <thread>
 #include <utility>
 
@@ -101,6 +102,7 @@ ViewerApp::~ViewerApp() {
   meshRenderer_.reset();
   groundRenderer_.reset();
   debugDraw_.reset();
+  overlayDraw_.reset();
   if (imguiReady_) {
     ImGui_ImplOpenGL3_Shutdown();
     ImGui_ImplGlfw_Shutdown();
@@ -149,6 +151,7 @@ bool ViewerApp::open(std::string* error) {
     meshRenderer_ = std::make_unique<render::MeshRenderer>();
     groundRenderer_ = std::make_unique<render::GroundRenderer>();
     debugDraw_ = std::make_unique<render::DebugDraw>();
+    overlayDraw_ = std::make_unique<render::DebugDraw>();
   } catch (const std::exception& e) {
     *error = e.what();
     return false;
@@ -244,13 +247,14 @@ float ViewerApp::groundHeight() const {
   return lowest;
 }
 
-void ViewerApp::stepSimulation() {
+double ViewerApp::timedStep() {
+  const Clock::time_point start = Clock::now();
   for (int k = 0; k < stepsPerFrame_; ++k) {
     scene_.world.step();
     timings_.phaseSum += scene_.world.lastProfile();
     ++timings_.steps;
   }
-  collectEvents();
+  return millisecondsSince(start);
 }
 
 void ViewerApp::collectEvents() {
@@ -407,6 +411,12 @@ void ViewerApp::drawOverlays(render::DebugDraw& draw) {
   }
 }
 
+void ViewerApp::queueLinesAndPoints() {
+  frameGroundHeight_ = groundHeight();
+  if (showColliders_) drawColliders(*debugDraw_);
+  drawOverlays(*overlayDraw_);
+}
+
 void ViewerApp::renderFrame() {
   glViewport(0, 0, framebufferWidth_, framebufferHeight_);
   glClearColor(0.16f, 0.17f, 0.20f, 1.0f);
@@ -440,7 +450,7 @@ void ViewerApp::renderFrame() {
   const float decade = std::pow(10.0f, std::floor(std::log10(raw)));
   const float mantissa = raw / decade;
   const float cell = decade * (mantissa < 1.5f ? 1.0f : mantissa < 3.5f ? 2.0f : 5.0f);
-  groundRenderer_->draw(viewProjection, eye, groundHeight(), cell, 5.0f * sceneSize_);
+  groundRenderer_->draw(viewProjection, eye, frameGroundHeight_, cell, 5.0f * sceneSize_);
 
   meshRenderer_->begin(view, projection, eye);
   // Closed, outward-oriented meshes: culling back faces halves llvmpipe's triangle work.
@@ -454,10 +464,8 @@ void ViewerApp::renderFrame() {
   }
   glDisable(GL_CULL_FACE);
   drawFoldTint();
-  if (showColliders_) drawColliders(*debugDraw_);
   debugDraw_->flush(viewProjection, 1.0f, true);
-  drawOverlays(*debugDraw_);
-  debugDraw_->flush(viewProjection, 6.0f, !(showParticles_ || showGoals_));
+  overlayDraw_->flush(viewProjection, 6.0f, !(showParticles_ || showGoals_));
   glViewport(0, 0, framebufferWidth_, framebufferHeight_);
 }
 
@@ -588,19 +596,34 @@ int ViewerApp::run() {
     // A switch asked for in an earlier frame: that frame showed "binding ..." (this blocks).
     if (embeddingRequest_.body >= 0 && embeddingRequest_.frame < frame_) applyEmbeddingRequest();
 
-    const Clock::time_point simStart = Clock::now();
+    // The frame's step runs on a second thread while this one draws (llvmpipe leaves a core
+    // mostly idle): the frame then shows the state before its step, one frame of latency. The
+    // drawing reads no World data: the overlays are queued before the step starts. Frames that
+    // must show what the stats file says run the step first, as without overlap: a screenshot's
+    // frame and the last frame of --frames (whose stats are written at exit).
     const bool stepping = !paused_ || stepOnce_;
     stepOnce_ = false;
+    const bool screenshotDue =
+        (!options_.screenshot.empty() && frame_ == screenshotFrame) || !screenshotRequest_.empty();
+    const bool lastFrame = options_.frames > 0 && frame_ + 1 >= options_.frames;
+    const bool overlap = stepping && options_.overlapStep && !screenshotDue && !lastFrame;
     updateDragTarget();
-    if (stepping) stepSimulation();
-    timings_.lastSim = stepping ? millisecondsSince(simStart) : 0.0;
-    if (stepping) samplePlots();
+    if (stepping && !overlap) {
+      timings_.lastSim = timedStep();
+      collectEvents();
+      samplePlots();
+    } else if (!stepping) {
+      timings_.lastSim = 0.0;
+    }
 
     const Clock::time_point deformStart = Clock::now();
     updateMeshes();
     updateFoldCheck();
     timings_.lastDeform = millisecondsSince(deformStart);
+    queueLinesAndPoints();
 
+    std::future<double> step;
+    if (overlap) step = std::async(std::launch::async, [this] { return timedStep(); });
     const Clock::time_point renderStart = Clock::now();
     if (framebufferWidth_ > 0 && framebufferHeight_ > 0) {
       renderFrame();
@@ -616,6 +639,11 @@ int ViewerApp::run() {
     }
     renderMs += millisecondsSince(renderStart);
     timings_.lastRender = renderMs;
+    if (overlap) {
+      timings_.lastSim = step.get();  // rethrows what the step threw
+      collectEvents();
+      samplePlots();
+    }
 
     timings_.simSum += timings_.lastSim;
     timings_.deformSum += timings_.lastDeform;

@@ -101,8 +101,14 @@ class ViewerApp {
   void rebuildBodyViews();
   void refreshClusters(int body);
   void frameCamera();
-  void stepSimulation();
+  // The frame's World steps; returns their wall time in ms. May run on a second thread while
+  // renderFrame draws: touches only the World and the step counters of timings_.
+  double timedStep();
   void updateMeshes();
+  // Everything renderFrame draws from World data, queued before the step starts: collider
+  // lines (debugDraw_), overlays (overlayDraw_), the ground height.
+  void queueLinesAndPoints();
+  // Draws views_ and the queued lines and points; reads no World data (see timedStep).
   void renderFrame();
   void drawOverlays(render::DebugDraw& draw);
   void drawColliders(render::DebugDraw& draw);
@@ -213,7 +219,9 @@ class ViewerApp {
 
   std::unique_ptr<render::MeshRenderer> meshRenderer_;
   std::unique_ptr<render::GroundRenderer> groundRenderer_;
-  std::unique_ptr<render::DebugDraw> debugDraw_;
+  std::unique_ptr<render::DebugDraw> debugDraw_;    // colliders, depth tested, 1-px points
+  std::unique_ptr<render::DebugDraw> overlayDraw_;  // particles, cage, clusters, goals, drag
+  float frameGroundHeight_ = 0.0f;                  // groundHeight() when the frame was queued
   std::vector<BodyView> views_;
   render::OrbitCamera camera_;
   glm::vec3 panelColour_{0.06f};  // background of the ImGui panel (cleared, not drawn by ImGui)

@@ -86,10 +86,15 @@ int runViewerCommand(int argc, char** argv) {
         return std::string();
       });
   cli.add_flag("--paused", options.startPaused, "start with the simulation paused");
+  bool noOverlap = false;
+  cli.add_flag("--no-overlap", noOverlap,
+               "step the simulation before drawing the frame, not on a second thread while it "
+               "is drawn (for comparing frame rates)");
   cli.add_flag("--hide-bodies", options.hideBodies, "do not draw the body meshes (for tests)");
   cli.add_flag("--no-ui", options.hideUi, "hide the control panel");
   try {
     cli.parse(argc, argv);
+    options.overlapStep = !noOverlap;
     if (!parseSize(size, &options.width, &options.height))
       throw CLI::ValidationError("--size",
                                  "expected WxH with 64 <= W, H <= 16384, got '" + size + "'");

@@ -23,6 +23,9 @@ struct ViewerOptions {
   // same cores, and spinning OpenMP workers competing with it cost more than they give for
   // scenes of a few hundred particles.
   int simThreads = 1;
+  // Step the simulation on a second thread while the frame is drawn (--no-overlap: one after
+  // the other, as before; for comparing frame rates).
+  bool overlapStep = true;
 };
 
 }  // namespace sb::app

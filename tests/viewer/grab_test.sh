@@ -24,8 +24,13 @@ for ((b = 0; b < count; b++)); do
   xdotool mousemove "$x" "$y"
   sleep 0.15
   xdotool mousedown 1
-  next_frames "$WORK/live.json" 3
-  cp "$WORK/live.json" "$WORK/held$b.json"
+  # The stats file is written every 3 frames, after the frame's events: the press shows in a
+  # later write, not necessarily the next one.
+  for try in $(seq 1 10); do
+    next_frames "$WORK/live.json" 3
+    cp "$WORK/live.json" "$WORK/held$b.json"
+    [ "$("$CHECK" get "$WORK/held$b.json" /drag/active)" = true ] && break
+  done
   xdotool mouseup 1
   next_frames "$WORK/live.json" 3
   [ "$("$CHECK" get "$WORK/held$b.json" /drag/active)" = true ] ||

@@ -9,6 +9,8 @@
 //       BODY's centre in AFTER minus BEFORE, along the camera's right axis, is at least MIN_METRES
 //   viewer_check still A.json B.json
 //       paused in both, B is a later frame, simulated time and every centre unchanged
+//   viewer_check same-state A.json B.json
+//       the same frame, step count and simulated time, and every body's centre bit for bit
 //   viewer_check plotted SHOT.png STATS WIDGET
 //       a line is drawn across the plot WIDGET: most pixel columns of its frame (the left half of
 //       the recorded rectangle; the label is on the right) that the overlay text does not cross
@@ -165,6 +167,28 @@ int still(const std::string& aPath, const std::string& bPath) {
   return ok ? 0 : 1;
 }
 
+int sameState(const std::string& aPath, const std::string& bPath) {
+  const json a = readJson(aPath), b = readJson(bPath);
+  bool ok = true;
+  for (const char* key : {"frame", "steps", "simTime", "bodyCount"})
+    if (a.at(key) != b.at(key)) {
+      std::printf("%s differs: %s vs %s\n", key, a.at(key).dump().c_str(),
+                  b.at(key).dump().c_str());
+      ok = false;
+    }
+  const std::size_t n = std::min(a.at("bodies").size(), b.at("bodies").size());
+  for (std::size_t i = 0; i < n; ++i)
+    for (int axis = 0; axis < 3; ++axis)
+      if (centreComponent(a, static_cast<int>(i), axis) !=
+          centreComponent(b, static_cast<int>(i), axis)) {
+        std::printf("body %zu: centre differs\n", i);
+        ok = false;
+        break;
+      }
+  std::printf("%s\n", ok ? "same state" : "NOT THE SAME STATE");
+  return ok ? 0 : 1;
+}
+
 int plotted(const std::string& shotPath, const std::string& statsPath, const std::string& widget) {
   const Image shot(shotPath);
   const json stats = readJson(statsPath);
@@ -257,6 +281,7 @@ int main(int argc, char** argv) {
     if (command == "moved" && argc == 6)
       return moved(argv[2], argv[3], std::stoi(argv[4]), std::stod(argv[5]));
     if (command == "still" && argc == 4) return still(argv[2], argv[3]);
+    if (command == "same-state" && argc == 4) return sameState(argv[2], argv[3]);
     if (command == "plotted" && argc == 5) return plotted(argv[2], argv[3], argv[4]);
     if (command == "tinted" && argc == 6)
       return tinted(argv[2], argv[3], std::stoi(argv[4]), std::stol(argv[5]));
