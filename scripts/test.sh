@@ -34,7 +34,8 @@ elif [ "${SOFTBODY_TSAN:-0}" = 1 ]; then
          -DCMAKE_CXX_COMPILER=clang++)
   export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:history_size=4"
   # The Xvfb viewer tests are built but not run here: they time real frames, which TSan's
-  # slowdown turns into timeouts; the viewer's threads are the same pool as everywhere else.
+  # slowdown turns into timeouts. viewer_step_thread (label "threads") does run: the viewer's own
+  # thread, the step beside the drawing, is checked here.
   labels=(-LE "soak|viewer")
 else
   # No benchmarks here either: they are not tests, and CI's TSan build compiles every one of them
