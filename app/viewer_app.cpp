@@ -163,6 +163,7 @@ bool ViewerApp::open(std::string* error) {
 }
 
 void ViewerApp::rebuildBodyViews() {
+  meshesCurrent_ = false;
   // Body indices may have changed: the fold watch and a pending switch refer to the old ones.
   clearFolds();
   embeddingRequest_ = EmbeddingRequest{};
@@ -273,6 +274,7 @@ void ViewerApp::collectEvents() {
 void ViewerApp::resetSimulation() {
   drag_ = Drag{};  // World::reset clears drags
   scene_.world.reset();
+  meshesCurrent_ = false;
   collectEvents();
   for (std::size_t i = 0; i < views_.size(); ++i) refreshClusters(static_cast<int>(i));
   clearPlots();
@@ -281,6 +283,7 @@ void ViewerApp::resetSimulation() {
 }
 
 void ViewerApp::updateMeshes() {
+  meshesCurrent_ = true;
   std::vector<int> stale;
   std::vector<PointsRowMajor*> outs;
   for (std::size_t i = 0; i < views_.size(); ++i)
@@ -612,14 +615,16 @@ int ViewerApp::run() {
       timings_.lastSim = timedStep();
       collectEvents();
       samplePlots();
+      meshesCurrent_ = false;
     } else if (!stepping) {
       timings_.lastSim = 0.0;
     }
 
     const Clock::time_point deformStart = Clock::now();
-    updateMeshes();
-    updateFoldCheck();
-    timings_.lastDeform = millisecondsSince(deformStart);
+    const bool deformed = !meshesCurrent_;  // a paused viewer deforms nothing
+    if (deformed) updateMeshes();
+    const bool checked = updateFoldCheck();
+    timings_.lastDeform = deformed || checked ? millisecondsSince(deformStart) : 0.0;
     queueLinesAndPoints();
 
     std::future<double> step;
@@ -643,6 +648,7 @@ int ViewerApp::run() {
       timings_.lastSim = step.get();  // rethrows what the step threw
       collectEvents();
       samplePlots();
+      meshesCurrent_ = false;
     }
 
     timings_.simSum += timings_.lastSim;

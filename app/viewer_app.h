@@ -198,7 +198,8 @@ class ViewerApp {
   void drawFoldStatus();
   bool foldStatusShown() const;  // drawFoldStatus draws something
   // Every kFoldCheckEvery frames while on: checks each watched body and recomputes the tint.
-  void updateFoldCheck();
+  // Returns whether it checked this frame.
+  bool updateFoldCheck();
   void clearFolds();  // forgets the watch (bodies changed) and the tint
   void updateFoldTint(int body, const FoldWatch::FoldedRegion* region);
   void drawFoldTint();  // in renderFrame, after the bodies
@@ -222,6 +223,10 @@ class ViewerApp {
   std::unique_ptr<render::DebugDraw> debugDraw_;    // colliders, depth tested, 1-px points
   std::unique_ptr<render::DebugDraw> overlayDraw_;  // particles, cage, clusters, goals, drag
   float frameGroundHeight_ = 0.0f;                  // groundHeight() when the frame was queued
+  // views_ hold the World's current positions, deformed (set by updateMeshes). Cleared by
+  // whatever moves particles or changes bodies or bindings: a step, reset, rebuilt views, a
+  // re-bind. A paused viewer then deforms nothing.
+  bool meshesCurrent_ = false;
   std::vector<BodyView> views_;
   render::OrbitCamera camera_;
   glm::vec3 panelColour_{0.06f};  // background of the ImGui panel (cleared, not drawn by ImGui)

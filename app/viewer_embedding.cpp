@@ -173,6 +173,7 @@ void ViewerApp::applyEmbeddingRequest() {
   try {
     const auto start = std::chrono::steady_clock::now();
     rebindRenderMesh(scene_, r.body, r.method);
+    meshesCurrent_ = false;  // the vertices follow the new weights from the next frame on
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (!v.embeddingError.empty() && errorMessage_ == name + ": " + v.embeddingError)

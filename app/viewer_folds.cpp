@@ -93,9 +93,9 @@ void ViewerApp::clearFolds() {
   lastFoldCheck_ = -1;
 }
 
-void ViewerApp::updateFoldCheck() {
-  if (!foldCheck_ || !foldError_.empty()) return;
-  if (lastFoldCheck_ >= 0 && frame_ - lastFoldCheck_ < kFoldCheckEvery) return;
+bool ViewerApp::updateFoldCheck() {
+  if (!foldCheck_ || !foldError_.empty()) return false;
+  if (lastFoldCheck_ >= 0 && frame_ - lastFoldCheck_ < kFoldCheckEvery) return false;
   lastFoldCheck_ = frame_;
   try {
     // In the start pose, so the watch means the same whenever it is made (the check may be
@@ -112,6 +112,7 @@ void ViewerApp::updateFoldCheck() {
     if (f.body >= 0 && f.body < static_cast<int>(byBody.size()))
       byBody[static_cast<std::size_t>(f.body)] = &f;
   for (std::size_t i = 0; i < views_.size(); ++i) updateFoldTint(static_cast<int>(i), byBody[i]);
+  return true;
 }
 
 void ViewerApp::updateFoldTint(int body, const FoldWatch::FoldedRegion* region) {

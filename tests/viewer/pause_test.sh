@@ -42,4 +42,12 @@ VIEWER_PID=
 t2=$("$CHECK" get "$WORK/paused1.json" /simTime)
 t3=$("$CHECK" get "$WORK/resumed.json" /simTime)
 [ "$t2" != "$t3" ] || fail "the simulation did not run again after space"
-echo "PASS: clicking Pause stopped the simulation; space resumed it ($t2 s -> $t3 s)"
+
+# Started paused, the viewer neither steps nor deforms the render meshes (they were deformed
+# once when the scene opened): both per-frame times are exactly zero.
+"$SOFTBODY" ${SCENE_ARGS[@]+"${SCENE_ARGS[@]}"} --paused --frames 30 --stats "$WORK/idle.json" \
+  >"$WORK/idle.log" 2>&1 || { cat "$WORK/idle.log"; fail "the paused run failed"; }
+[ "$("$CHECK" get "$WORK/idle.json" /msPerFrame/simulation)" = 0 ] || fail "a paused viewer stepped"
+[ "$("$CHECK" get "$WORK/idle.json" /msPerFrame/deform)" = 0 ] ||
+  fail "a paused viewer deformed its meshes again every frame"
+echo "PASS: clicking Pause stopped the simulation; space resumed it ($t2 s -> $t3 s); paused, nothing is stepped or deformed"
