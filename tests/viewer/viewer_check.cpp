@@ -134,6 +134,22 @@ int moved(const std::string& beforePath, const std::string& afterPath, int body,
   return along >= minMetres ? 0 : 1;
 }
 
+// Whether every body of A has the same centre in B, bit for bit; prints "body N WHAT" for each
+// that does not.
+bool sameCentres(const json& a, const json& b, const char* what) {
+  bool same = true;
+  const std::size_t n = std::min(a.at("bodies").size(), b.at("bodies").size());
+  for (std::size_t i = 0; i < n; ++i)
+    for (int axis = 0; axis < 3; ++axis)
+      if (centreComponent(a, static_cast<int>(i), axis) !=
+          centreComponent(b, static_cast<int>(i), axis)) {
+        std::printf("body %zu %s\n", i, what);
+        same = false;
+        break;
+      }
+  return same;
+}
+
 int still(const std::string& aPath, const std::string& bPath) {
   const json a = readJson(aPath), b = readJson(bPath);
   bool ok = true;
@@ -152,15 +168,7 @@ int still(const std::string& aPath, const std::string& bPath) {
                 a.at("simTime").get<double>(), b.at("simTime").get<double>());
     ok = false;
   }
-  const std::size_t n = a.at("bodies").size();
-  for (std::size_t i = 0; i < n; ++i)
-    for (int axis = 0; axis < 3; ++axis)
-      if (centreComponent(a, static_cast<int>(i), axis) !=
-          centreComponent(b, static_cast<int>(i), axis)) {
-        std::printf("body %zu moved while paused\n", i);
-        ok = false;
-        break;
-      }
+  if (!sameCentres(a, b, "moved while paused")) ok = false;
   std::printf("frames %ld -> %ld, t = %.4f s -> %.4f s: %s\n", a.at("frame").get<long>(),
               b.at("frame").get<long>(), a.at("simTime").get<double>(),
               b.at("simTime").get<double>(), ok ? "still" : "NOT STILL");
@@ -176,15 +184,7 @@ int sameState(const std::string& aPath, const std::string& bPath) {
                   b.at(key).dump().c_str());
       ok = false;
     }
-  const std::size_t n = std::min(a.at("bodies").size(), b.at("bodies").size());
-  for (std::size_t i = 0; i < n; ++i)
-    for (int axis = 0; axis < 3; ++axis)
-      if (centreComponent(a, static_cast<int>(i), axis) !=
-          centreComponent(b, static_cast<int>(i), axis)) {
-        std::printf("body %zu: centre differs\n", i);
-        ok = false;
-        break;
-      }
+  if (!sameCentres(a, b, "has another centre")) ok = false;
   std::printf("%s\n", ok ? "same state" : "NOT THE SAME STATE");
   return ok ? 0 : 1;
 }
