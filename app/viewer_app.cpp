@@ -487,6 +487,8 @@ bool ViewerApp::takeScreenshot(const std::string& path) {
 bool ViewerApp::openScene(const std::string& path) {
   try {
     Scene loaded = loadScene(path);
+    // Bodies still being prepared were meant for the scene being closed (waits for them).
+    pendingBodies_.clear();
     endDrag();
     scene_ = std::move(loaded);
     rebuildBodyViews();
@@ -596,6 +598,7 @@ int ViewerApp::run() {
     // The body buttons act after the panel is drawn (the panel walks the bodies).
     if (removeRequest_ >= 0) removeBody(std::exchange(removeRequest_, -1));
     if (duplicateRequest_ >= 0) duplicateBody(std::exchange(duplicateRequest_, -1));
+    addPreparedBodies();
     // A switch asked for in an earlier frame: that frame showed "binding ..." (this blocks).
     if (embeddingRequest_.body >= 0 && embeddingRequest_.frame < frame_) applyEmbeddingRequest();
 

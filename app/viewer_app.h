@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cstdint>
 #include <deque>
+#include <future>
 #include <map>
 #include <memory>
 #include <string>
@@ -133,8 +134,13 @@ class ViewerApp {
   // Files dropped on the window: scene files are opened, anything else added as a mesh body.
   void onDrop(const std::vector<std::string>& paths);
   // A soft body (linear, automatic cage) from the mesh file, sized and placed above the scene.
-  // False with errorMessage_ set when the file cannot be read or caged.
+  // The cage and the binding are made on another thread (prepareSceneBody) while the scene keeps
+  // running; addPreparedBodies adds the body when they are ready. False with errorMessage_ set
+  // when the file cannot be read.
   bool addBodyFromMesh(const std::string& path);
+  // Each frame, with the World quiescent: adds the bodies whose preparation finished, in the
+  // order they were asked for (a failed one sets errorMessage_).
+  void addPreparedBodies();
   void removeBody(int body);
   void duplicateBody(int body);  // the body as saved, lifted above the highest body
   void bodiesChanged();          // rebuilds what the viewer keeps per body
@@ -228,6 +234,13 @@ class ViewerApp {
   // re-bind. A paused viewer then deforms nothing.
   bool meshesCurrent_ = false;
   std::vector<BodyView> views_;
+  // Bodies from mesh files being prepared on another thread (addBodyFromMesh), oldest first.
+  struct PendingBody {
+    std::string name;
+    std::chrono::steady_clock::time_point start;
+    std::future<PreparedBody> prepared;
+  };
+  std::deque<PendingBody> pendingBodies_;
   render::OrbitCamera camera_;
   glm::vec3 panelColour_{0.06f};  // background of the ImGui panel (cleared, not drawn by ImGui)
   float sceneSize_ = 1.0f;  // diagonal of the bodies' bounds when the scene was opened, metres

@@ -1,8 +1,9 @@
 // Adding and removing bodies while the viewer runs: a mesh file dropped on the window (or named
 // in the Scene file section) becomes a soft body above the others, with an automatic cage
 // (sim/cage/auto_cage.h) unless it is one of the scene's cages itself; any body can be
-// duplicated or removed. Bodies are added through the scene library (addSceneBody), so they are
-// checked like bodies of a scene file and saved like them.
+// duplicated or removed. Bodies are added through the scene library (addSceneBody, or
+// prepareSceneBody on another thread and then addPreparedBody for a mesh, whose cage takes
+// seconds for a large one), so they are checked like bodies of a scene file and saved like them.
 #include <algorithm>
 #include <cctype>
 #include <chrono>
@@ -79,24 +80,43 @@ bool ViewerApp::addBodyFromMesh(const std::string& path) {
         {"alpha", 0.5},
         {"beta", 0.3},
         {"damping", 0.1}};
-    const auto start = std::chrono::steady_clock::now();
-    const int index = addSceneBody(scene_, body.dump(), path, "");
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    bodiesChanged();
-    const SceneBody& added = scene_.bodies[static_cast<std::size_t>(index)];
+    // The render mesh's path is absolute: no folder to resolve against.
+    pendingBodies_.push_back({name, std::chrono::steady_clock::now(),
+                              std::async(std::launch::async, [text = body.dump(), path] {
+                                return prepareSceneBody(text, path, "");
+                              })});
     errorMessage_.clear();
-    char text[256];
-    std::snprintf(text, sizeof text,
-                  "added %s: %d particles, an automatic cage of %d vertices (%.1f s), linear "
-                  "alpha 0.5",
-                  name.c_str(), scene_.world.particleCount(added.handle), added.cageVertexCount,
-                  seconds);
-    statusMessage_ = text;
+    statusMessage_ = "adding " + name + ": making its automatic cage";
     return true;
   } catch (const std::exception& e) {
     errorMessage_ = std::string("cannot add a body from ") + path + ": " + e.what();
     return false;
+  }
+}
+
+void ViewerApp::addPreparedBodies() {
+  while (!pendingBodies_.empty() && pendingBodies_.front().prepared.wait_for(
+                                        std::chrono::seconds(0)) == std::future_status::ready) {
+    PendingBody pending = std::move(pendingBodies_.front());
+    pendingBodies_.pop_front();
+    try {
+      const int index = addPreparedBody(scene_, pending.prepared.get());
+      const double seconds =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - pending.start).count();
+      bodiesChanged();
+      const SceneBody& added = scene_.bodies[static_cast<std::size_t>(index)];
+      errorMessage_.clear();
+      char text[256];
+      std::snprintf(text, sizeof text,
+                    "added %s: %d particles, an automatic cage of %d vertices (%.1f s), linear "
+                    "alpha 0.5",
+                    pending.name.c_str(), scene_.world.particleCount(added.handle),
+                    added.cageVertexCount, seconds);
+      statusMessage_ = text;
+    } catch (const std::exception& e) {
+      errorMessage_ = "cannot add " + pending.name + ": " + e.what();
+      statusMessage_.clear();
+    }
   }
 }
 

@@ -56,6 +56,7 @@ bool ViewerApp::writeStats(const std::string& path) {
   j["savePath"] = savePathInput_;
   j["quitDialog"] = quitDialog_;
   j["bodyCount"] = scene_.bodies.size();
+  j["addingBodies"] = pendingBodies_.size();  // mesh bodies whose cage is being made
   j["binding"] = embeddingRequest_.body >= 0;
   json folded = json::array();
   for (const FoldWatch::FoldedRegion& f : folds_)

@@ -707,26 +707,39 @@ Scene parseScene(const std::string& text, const std::string& name, const std::st
   return scene;
 }
 
-int addSceneBody(Scene& scene, const std::string& bodyJson, const std::string& name,
-                 const std::string& baseDir) {
+PreparedBody prepareSceneBody(const std::string& bodyJson, const std::string& name,
+                              const std::string& baseDir) {
   const json root = parseJson(bodyJson, name);
   Fields f(root, "", name);
-  BodyDef def;
+  PreparedBody prepared;
   BoundMeshes bound;
-  SceneBody body = parseBody(f, baseDir, def, bound);
+  prepared.body = parseBody(f, baseDir, prepared.def, bound);
+  prepared.name = name;
+  prepared.baseDir = baseDir;
+  return prepared;
+}
+
+int addPreparedBody(Scene& scene, PreparedBody prepared) {
+  SceneBody& body = prepared.body;
   // Its paths as the rest of the scene writes them: against the scene's mesh folder.
+  const std::string& baseDir = prepared.baseDir;
   if (baseDir != scene.meshFolder) {
     if (!body.meshPath.empty()) body.meshPath = rebase(body.meshPath, baseDir, scene.meshFolder);
-    if (body.render)  // its own: `bound` above shares meshes within this call only
+    if (body.render)  // its own: prepareSceneBody shares meshes within one call only
       body.render->path = rebase(body.render->path, baseDir, scene.meshFolder);
   }
   try {
-    body.handle = scene.world.addBody(def);
+    body.handle = scene.world.addBody(prepared.def);
   } catch (const std::invalid_argument& e) {
-    f.fail("", e.what());
+    throw SceneError(prepared.name + ": " + e.what());
   }
   scene.bodies.push_back(std::move(body));
   return static_cast<int>(scene.bodies.size()) - 1;
+}
+
+int addSceneBody(Scene& scene, const std::string& bodyJson, const std::string& name,
+                 const std::string& baseDir) {
+  return addPreparedBody(scene, prepareSceneBody(bodyJson, name, baseDir));
 }
 
 void removeSceneBody(Scene& scene, int body) {

@@ -158,6 +158,23 @@ Scene parseScene(const std::string& jsonText, const std::string& name, const std
 // FIELD: REASON"); the scene is unchanged then.
 int addSceneBody(Scene& scene, const std::string& bodyJson, const std::string& name,
                  const std::string& baseDir);
+// addSceneBody in two parts, for callers that must not wait for the slow one (the viewer adds a
+// dropped mesh while the scene keeps running). prepareSceneBody does what takes time — reads the
+// meshes, makes an automatic cage, binds the render mesh — and touches no Scene, so it may run on
+// another thread while a scene steps; addPreparedBody then adds the result to a scene (quick).
+struct PreparedBody {
+  SceneBody body;       // handle not yet valid; mesh paths relative to baseDir
+  BodyDef def;          // what the World gets
+  std::string name;     // for messages, as given to prepareSceneBody
+  std::string baseDir;  // the folder its relative mesh paths were read against
+};
+// Throws SceneError ("NAME: FIELD: REASON") as addSceneBody.
+PreparedBody prepareSceneBody(const std::string& bodyJson, const std::string& name,
+                              const std::string& baseDir);
+// Adds the body to the scene's World and bodies, its paths made relative to scene.meshFolder.
+// Returns its index. Throws SceneError ("NAME: REASON") when the World refuses it; the scene is
+// unchanged then.
+int addPreparedBody(Scene& scene, PreparedBody prepared);
 // Removes body i from the scene and its World; the bodies after it move down one index.
 void removeSceneBody(Scene& scene, int body);
 // Writes the scene with the world's current settings and body parameters. Atomic: writes a

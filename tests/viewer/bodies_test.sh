@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Bodies added and removed while the viewer runs (xdotool, inside Xvfb): a mesh file named in
-# the Scene file section is added as a soft body with an automatic cage (the same path a file
-# dropped on the window takes), falls and comes to rest above the ground; body 0's duplicate and
+# the Scene file section is added as a soft body with an automatic cage made on another thread
+# (the same path a file dropped on the window takes), falls and comes to rest above the ground; body 0's duplicate and
 # remove buttons add a copy and take the body away.
 # usage: bodies_test.sh SOFTBODY CHECK WORKDIR
 SOFTBODY=$1 CHECK=$2 WORK=$3
@@ -20,7 +20,12 @@ next_frames "$live" 5
 click_widget "$live" addMeshPath
 replace_text "$mesh"
 click_widget "$live" addMesh
-next_frames "$live" 5
+# The cage is made on another thread while the scene runs: the body comes some frames later.
+for try in $(seq 1 60); do
+  next_frames "$live" 5
+  [ "$("$CHECK" get "$live" /bodyCount)" = $((n0 + 1)) ] && break
+done
+[ "$("$CHECK" get "$live" /addingBodies)" = 0 ] || fail "a body is still being added"
 status=$("$CHECK" get "$live" /status)
 echo "status: $status"
 [ "$("$CHECK" get "$live" /bodyCount)" = $((n0 + 1)) ] || fail "no body was added ($("$CHECK" get "$live" /error))"
