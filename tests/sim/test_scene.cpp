@@ -802,15 +802,16 @@ TEST(Scene, ABodyPreparedWhileTheSceneStepsIsTheBodyAddedInOneCall) {
   const std::string body = R"({"name": "dropped", "renderMesh": "bunny.obj",
       "cage": {"auto": true, "vertices": 120}, "translation": [0, 2.5, 0], "scale": 0.1,
       "mode": "linear", "alpha": 0.5})";
-  Scene oneCall = loadScene(defaultScenePath());
-  for (int s = 0; s < 30; ++s) oneCall.world.step();
-  const int a = addSceneBody(oneCall, body, "dropped", dir);
-
+  // Prepared first: with an empty cache the cage is made while the scene steps.
   Scene twoParts = loadScene(defaultScenePath());
   std::future<PreparedBody> prepared =
       std::async(std::launch::async, [&] { return prepareSceneBody(body, "dropped", dir); });
   for (int s = 0; s < 30; ++s) twoParts.world.step();
   const int b = addPreparedBody(twoParts, prepared.get());
+
+  Scene oneCall = loadScene(defaultScenePath());
+  for (int s = 0; s < 30; ++s) oneCall.world.step();
+  const int a = addSceneBody(oneCall, body, "dropped", dir);
   EXPECT_EQ(a, b);
   EXPECT_EQ(twoParts.world.stateHash(), oneCall.world.stateHash());
   EXPECT_EQ(twoParts.bodies[size_t(b)].render->path, oneCall.bodies[size_t(a)].render->path);
