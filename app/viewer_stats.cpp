@@ -317,9 +317,8 @@ bool ViewerApp::writeStats(const std::string& path) {
 
   try {
     // Unsynced: rewritten every --stats-every frames, readers need it whole, not crash-proof.
-    const std::string text = j.dump(2);
     writeFileAtomic(
-        path, [&](std::ostream& out) { out << text << "\n"; }, Durability::Unsynced);
+        path, [&](std::ostream& out) { out << j.dump(2) << "\n"; }, Durability::Unsynced);
     return true;
   } catch (const FileError& e) {
     std::fprintf(stderr, "softbody: cannot write the stats file: %s\n", e.what());
