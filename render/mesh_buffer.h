@@ -18,7 +18,8 @@ class MeshBuffer {
   MeshBuffer(const MeshBuffer&) = delete;
   MeshBuffer& operator=(const MeshBuffer&) = delete;
 
-  // Triangle indices, 3 per triangle (#T×3 row-major ints). Call when the topology changes.
+  // Triangle indices, 3 per triangle (#T×3 row-major ints). Call when the topology changes. The
+  // triangles are drawn in another order (cacheFriendlyTriangleOrder), each with its winding.
   void setIndices(const std::int32_t* indices, std::size_t triangleCount);
   // Vertex positions and normals, #V×3 row-major floats each. Call every frame.
   void setVertices(const float* positions, const float* normals, std::size_t vertexCount);

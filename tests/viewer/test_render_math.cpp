@@ -1,7 +1,11 @@
 // Unit tests of the render library's math (no GL context needed): ray/triangle picking, the
-// orbit camera's rays and projection, smooth normals.
+// orbit camera's rays and projection, smooth normals, the cache-friendly triangle order.
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
+#include <deque>
+#include <random>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -9,6 +13,7 @@
 
 #include "render/orbit_camera.h"
 #include "render/picking.h"
+#include "render/triangle_order.h"
 
 namespace sb::render {
 namespace {
@@ -127,6 +132,86 @@ TEST(OrbitCamera, PanKeepsDistanceAndFrameFitsBox) {
     EXPECT_GE(pixel.y, 0.0f);
     EXPECT_LE(pixel.y, 720.0f);
   }
+}
+
+// An n×n grid of quads, two triangles each, counter-clockwise seen from +z.
+std::vector<std::int32_t> gridTriangles(int n) {
+  std::vector<std::int32_t> indices;
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x) {
+      const std::int32_t a = y * (n + 1) + x, b = a + 1, c = a + n + 1, d = c + 1;
+      indices.insert(indices.end(), {a, b, d, a, d, c});
+    }
+  return indices;
+}
+
+std::vector<std::int32_t> shuffledTriangles(std::vector<std::int32_t> indices, unsigned seed) {
+  std::mt19937 random(seed);
+  const std::size_t count = indices.size() / 3;
+  for (std::size_t i = count - 1; i > 0; --i) {  // Fisher–Yates on whole triangles
+    const std::size_t j = random() % (i + 1);
+    for (int k = 0; k < 3; ++k) std::swap(indices[3 * i + k], indices[3 * j + k]);
+  }
+  return indices;
+}
+
+// Each triangle rotated to start at its smallest index (a rotation keeps the winding), sorted.
+std::vector<std::array<std::int32_t, 3>> canonicalTriangles(const std::vector<std::int32_t>& in) {
+  std::vector<std::array<std::int32_t, 3>> out;
+  for (std::size_t t = 0; 3 * t < in.size(); ++t) {
+    std::array<std::int32_t, 3> tri{in[3 * t], in[3 * t + 1], in[3 * t + 2]};
+    std::rotate(tri.begin(), std::min_element(tri.begin(), tri.end()), tri.end());
+    out.push_back(tri);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// Vertices shaded per triangle with a first-in-first-out cache of `size` vertices: another cache
+// model than the least-recently-used one the order is built for.
+double verticesShadedPerTriangle(const std::vector<std::int32_t>& indices, std::size_t size) {
+  std::deque<std::int32_t> cache;
+  std::size_t shaded = 0;
+  for (std::int32_t v : indices) {
+    if (std::find(cache.begin(), cache.end(), v) != cache.end()) continue;
+    ++shaded;
+    cache.push_back(v);
+    if (cache.size() > size) cache.pop_front();
+  }
+  return static_cast<double>(shaded) / static_cast<double>(indices.size() / 3);
+}
+
+TEST(TriangleOrder, KeepsEveryTriangleWithItsWinding) {
+  const std::vector<std::int32_t> mesh = shuffledTriangles(gridTriangles(30), 7);
+  const std::vector<std::int32_t> ordered =
+      cacheFriendlyTriangleOrder(mesh.data(), mesh.size() / 3);
+  ASSERT_EQ(ordered.size(), mesh.size());
+  EXPECT_EQ(canonicalTriangles(ordered), canonicalTriangles(mesh));
+  EXPECT_NE(ordered, mesh);
+}
+
+TEST(TriangleOrder, ShadesAGridVertexAboutOnce) {
+  // A grid of n² quads has (n + 1)² vertices for 2n² triangles: at best ~0.5 shaded per triangle.
+  const std::vector<std::int32_t> mesh = shuffledTriangles(gridTriangles(40), 11);
+  const double before = verticesShadedPerTriangle(mesh, 32);
+  const std::vector<std::int32_t> ordered =
+      cacheFriendlyTriangleOrder(mesh.data(), mesh.size() / 3);
+  const double after = verticesShadedPerTriangle(ordered, 32);
+  EXPECT_GT(before, 2.5);  // shuffled: nearly every corner is a new vertex
+  EXPECT_LT(after, 0.75);
+  // Already in rows: reordering does not make it worse.
+  const std::vector<std::int32_t> rows = gridTriangles(40);
+  const std::vector<std::int32_t> fromRows =
+      cacheFriendlyTriangleOrder(rows.data(), rows.size() / 3);
+  EXPECT_LE(verticesShadedPerTriangle(fromRows, 32), verticesShadedPerTriangle(rows, 32));
+}
+
+TEST(TriangleOrder, EmptyDegenerateAndLoneTriangles) {
+  EXPECT_TRUE(cacheFriendlyTriangleOrder(nullptr, 0).empty());
+  // A triangle with a repeated vertex, lone triangles and unused vertex numbers are all kept.
+  const std::vector<std::int32_t> soup{5, 5, 6, 0, 1, 2, 9, 8, 7, 3, 4, 3, 12, 10, 11};
+  const std::vector<std::int32_t> ordered = cacheFriendlyTriangleOrder(soup.data(), 5);
+  EXPECT_EQ(canonicalTriangles(ordered), canonicalTriangles(soup));
 }
 
 }  // namespace
