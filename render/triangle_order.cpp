@@ -18,11 +18,10 @@ float vertexScore(int cachePosition, int trianglesLeft) {
   if (cachePosition >= 0) {
     // The last triangle's own three vertices get one flat score: favouring the very newest would
     // make thin strips that leave long unfinished edges behind.
-    score = cachePosition < 3
-                ? 0.75f
-                : std::pow(1.0f - static_cast<float>(cachePosition - 3) /
-                                      static_cast<float>(kCacheSize - 3),
-                           1.5f);
+    score = cachePosition < 3 ? 0.75f
+                              : std::pow(1.0f - static_cast<float>(cachePosition - 3) /
+                                                    static_cast<float>(kCacheSize - 3),
+                                         1.5f);
   }
   // Vertices with few triangles left are finished early, so that no lone triangles are left to
   // be drawn later when their vertices have long left the cache.
