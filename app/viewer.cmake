@@ -13,6 +13,7 @@ if(SOFTBODY_BUILD_VIEWER)
     ${CMAKE_CURRENT_LIST_DIR}/viewer_plots.cpp
     ${CMAKE_CURRENT_LIST_DIR}/viewer_ui.cpp
     ${CMAKE_CURRENT_LIST_DIR}/viewer_stats.cpp
+    ${CMAKE_CURRENT_LIST_DIR}/stats_file_writer.cpp
     ${CMAKE_CURRENT_LIST_DIR}/viewer_embedding.cpp
     ${CMAKE_CURRENT_LIST_DIR}/viewer_folds.cpp
   )

@@ -37,6 +37,8 @@ class DebugDraw;
 
 namespace sb::app {
 
+class StatsFileWriter;
+
 // What the viewer keeps per body to draw and pick it.
 struct BodyView {
   std::vector<std::int32_t> triangles;  // #T×3 flat, the scene's renderTriangles(i)
@@ -67,6 +69,11 @@ struct BodyView {
   // The triangle whose centroid gave the last --stats grab pixel (none: SIZE_MAX); the next write
   // tries it first.
   std::size_t grabTriangle = std::numeric_limits<std::size_t>::max();
+  // When the last write found no grab pixel (the body is hidden), where in its list of candidate
+  // triangles the next write goes on: a hidden body tries a few candidates per write in turn
+  // instead of all of them every write.
+  std::size_t grabNextCandidate = 0;
+  bool grabMissed = false;
 };
 
 // Rolling timing figures, milliseconds.
@@ -211,10 +218,11 @@ class ViewerApp {
   void drawFoldTint();  // in renderFrame, after the bodies
 
   // ---- viewer_stats.cpp ----
-  // Writes the stats file (atomically); false, with the reason on stderr, when it cannot.
+  // Gathers the stats and hands them to statsWriter_, which writes options_.statsPath on its own
+  // thread. Returns false when a write has failed so far (the reason went to stderr).
   // Not const: it keeps each body's grab triangle for the next write (BodyView::grabTriangle).
-  bool writeStats(const std::string& path);
-  // writeStats(options_.statsPath), its wall time added to statsMsSum_ (printed at exit).
+  bool writeStats();
+  // writeStats(), its wall time on this thread added to statsMsSum_ (printed at exit).
   bool timedStatsWrite();
 
   ViewerOptions options_;
@@ -306,6 +314,7 @@ class ViewerApp {
   bool outputFailed_ = false;
   long statsWrites_ = 0;
   double statsMsSum_ = 0.0;
+  std::unique_ptr<StatsFileWriter> statsWriter_;  // with --stats
 
   // A switch of a body's embedding asked for in the panel, bound at the start of a later frame.
   struct EmbeddingRequest {
