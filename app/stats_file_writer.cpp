@@ -20,13 +20,14 @@ StatsFileWriter::~StatsFileWriter() {
 }
 
 bool StatsFileWriter::post(nlohmann::json stats) {
+  bool failed = false;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     waiting_ = std::move(stats);
-    if (failed_) return false;
+    failed = failed_;
   }
-  changed_.notify_all();
-  return true;
+  changed_.notify_all();  // also after a failure: finish() waits for this file to be tried
+  return !failed;
 }
 
 bool StatsFileWriter::finish() {
