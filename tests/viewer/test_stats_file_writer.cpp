@@ -19,8 +19,8 @@ namespace sb::app {
 namespace {
 
 std::filesystem::path scratchFile(const std::string& name) {
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("softbody_stats_writer_" + std::to_string(::getpid()));
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("softbody_stats_writer_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   return dir / name;
 }
