@@ -18,6 +18,14 @@ namespace {
 // Smallest accepted quality 4√3·area / Σ edge² of a new triangle (1 = equilateral): slivers make
 // mean value coordinates ill-conditioned and the intersection tests fragile.
 constexpr double kMinQuality = 0.03;
+// Weight of the edge-length term added to a candidate's quadric error when it is queued: cost +
+// kEdgeTie·|a − b|⁴ (voxel frame; the quadric is area-weighted, so both are lengths⁴). Where the
+// planes decide (curved parts) it changes nothing: for an edge of length L on a surface of radius
+// R voxels the quadric is ~L⁶/(64R²), which outweighs the term once L > 0.08·R. On flat parts
+// every collapse costs ~0, and without the term the ties went to the lowest vertex index, so one
+// vertex swallowed its whole face: fans of up to 186 triangles whose checks grow with the square
+// of their size (a 120k-triangle box: 2.9 s of decimation, 0.3 s with the term; same Hausdorff).
+constexpr double kEdgeTie = 1e-4;
 
 // Squared distance to a set of planes, area-weighted: x·A·x + 2·b·x + c.
 struct Quadric {
@@ -227,10 +235,14 @@ class Decimator {
     return out;
   }
 
+  // Queues edge (a, b) by its cheapest target's quadric error plus the edge-length tie-break.
   void push(int a, int b) {
     if (a > b) std::swap(a, b);
-    heap_.push({targets(a, b)[0].first, a, b, version_[static_cast<std::size_t>(a)],
-                version_[static_cast<std::size_t>(b)]});
+    const double length2 =
+        (cage_.vertices[static_cast<std::size_t>(a)] - cage_.vertices[static_cast<std::size_t>(b)])
+            .squaredNorm();
+    heap_.push({targets(a, b)[0].first + kEdgeTie * length2 * length2, a, b,
+                version_[static_cast<std::size_t>(a)], version_[static_cast<std::size_t>(b)]});
   }
 
   bool tryCollapse(int a, int b) {

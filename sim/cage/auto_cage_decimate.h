@@ -8,8 +8,9 @@ namespace sb::cage::detail {
 
 // Collapses edges of `cage` (closed, 2-manifold, outward-oriented, free of self-intersections,
 // enclosing every guard point at ≥ clearance; voxel frame) in order of quadric error (Garland &
-// Heckbert) until it has at most `budget` vertices or no collapse passes. A collapse to the
-// quadric-optimal position, else the midpoint, else an endpoint, is made only when
+// Heckbert; ties on flat parts go to the shorter edge) until it has at most `budget` vertices or no
+// collapse passes. A collapse to the quadric-optimal position, else the midpoint, else an endpoint,
+// is made only when
 //  (a) every guard point stays inside, at ≥ clearance from the new triangles: only the collapsed
 //      one-ring changes, so a point's winding number changes by (Σ solid angles of the new fan −
 //      Σ of the old fan) / 4π, which must be 0 for each guard point near the one-ring;
