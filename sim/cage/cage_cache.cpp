@@ -11,7 +11,7 @@ namespace sb::cage {
 
 namespace {
 // Bump when makeCage's result for the same input changes, so old cages are not reused.
-constexpr std::uint64_t kCageCacheVersion = 1;
+constexpr std::uint64_t kCageCacheVersion = 2;
 }  // namespace
 
 std::array<std::uint64_t, 2> cageCacheKey(const mesh::TriangleMesh& mesh,
