@@ -285,6 +285,28 @@ TEST(AutoCage, SelfIntersectingUnionOfTwoBoxes) {
                    mesh::testing::makeBox(2, 2, 2, Vec3(1, 1, 1), Vec3(0.5, 0.4, 0.3))));
 }
 
+// Flat faces: every collapse on them costs ~0 in the quadric, so only the tie-break decides.
+// Won by the lowest vertex index, it let one vertex swallow its whole face: on a box, vertices of
+// valence 89 and a median triangle quality of 0.07 (4√3·area / Σ edge², 1 for equilateral) —
+// slivers at the decimation's floor of 0.03 that make mean value coordinates ill-conditioned.
+TEST(AutoCage, FlatFacesGiveWellShapedTriangles) {
+  const CageResult c = makeCage(mesh::testing::makeBox(4, 4, 4), CageOptions{});
+  const TriangleMesh& cage = c.cage;
+  std::vector<int> valence(cage.vertices.size(), 0);
+  std::vector<double> quality;
+  for (const auto& t : cage.triangles) {
+    for (const int v : t) valence[std::size_t(v)] += 1;  // closed: one triangle per neighbour
+    const Vec3 &a = cage.vertices[std::size_t(t[0])], &b = cage.vertices[std::size_t(t[1])],
+               &d = cage.vertices[std::size_t(t[2])];
+    const double edges2 = (b - a).squaredNorm() + (d - b).squaredNorm() + (a - d).squaredNorm();
+    quality.push_back(2.0 * std::sqrt(3.0) * (b - a).cross(d - a).norm() / edges2);
+  }
+  std::sort(quality.begin(), quality.end());
+  EXPECT_LE(*std::max_element(valence.begin(), valence.end()), 12);
+  EXPECT_GE(quality[quality.size() / 2], 0.6) << "median triangle quality";
+  EXPECT_GE(quality[quality.size() / 10], 0.3) << "10th percentile";
+}
+
 // A triangle soup: every triangle with corners of its own (nothing shared, nothing closed), and
 // a single open sheet of zero thickness.
 TEST(AutoCage, TriangleSoupAndOpenSheet) {
