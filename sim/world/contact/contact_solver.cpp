@@ -294,6 +294,11 @@ void solveConstraint(const Side& p, const Side& o, ContactPoint& c, bool blended
     applyImpulse(p, rp, dl * n, sp, h, false);
     applyImpulse(o, ro, -dl * n, so, h, false);
   }
+  // A contact that carries no load and no friction impulse keeps none: the cone's radius μλ is
+  // zero, so the visit below would end where it starts. Most visits are of such contacts (about
+  // 80 % in the large scene and in a settled layer of bunnies: the margin's speculative
+  // contacts), and this skips their slip and cone arithmetic.
+  if (lambda == 0.0f && c.tangent[j] == Vec3f::Zero()) return;
   if (!(c.friction > 0.0f)) return;
   const Vec3f rel = measuredVelocity(p, rp, blended) - measuredVelocity(o, ro, blended);
   const Vec3f& t1 = c.tangent1;
