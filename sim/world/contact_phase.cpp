@@ -448,7 +448,8 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
     // built and the region still fits: lookups then widen by that drift (findContacts), so
     // resting and slowly moving bodies skip the rebuild.
     float drift = 0;
-    const bool reusable = cs.gridModel == &m && cs.gridRegion.contains(cs.region);
+    const bool sameSurface = cs.gridModel == &m;
+    const bool reusable = sameSurface && cs.gridRegion.contains(cs.region);
     if (reusable) drift = std::sqrt((x - cs.gridPositions).rowwise().squaredNorm().maxCoeff());
     if (!reusable || !(drift <= kGridSlack * m.spacing)) {
       cs.gridRegion = cs.region;
@@ -457,7 +458,7 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
       // Cells of one spacing: a triangle grown by its reach lands in at most 3×3×3 cells, and a
       // cell holds a dozen or two triangles (most rejected by their boxes).
       cs.grid.build(m.surface, x.col(0).data(), x.col(1).data(), x.col(2).data(), reachOf(s),
-                    m.spacing, cs.gridRegion);
+                    m.spacing, cs.gridRegion, sameSurface);
       cs.gridPositions = x;
       cs.gridModel = &m;
       drift = 0;

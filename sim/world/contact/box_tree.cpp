@@ -21,6 +21,31 @@ void BoxTree::build(const std::vector<Eigen::AlignedBox3f>& boxes) {
   buildNode(0, 0, n, boxes);
 }
 
+void BoxTree::refit(const std::vector<Eigen::AlignedBox3f>& boxes) {
+  if (nodes_.empty() || items_.size() != boxes.size()) {
+    build(boxes);
+    return;
+  }
+  for (const Eigen::AlignedBox3f& b : boxes)
+    if (!b.center().allFinite()) {
+      nodes_.clear();  // as build: no tree (callers pass over all boxes), built anew next time
+      return;
+    }
+  // Children come after their parent (buildNode appends them), so a backward pass sees every
+  // child before its parent.
+  for (size_t k = nodes_.size(); k-- > 0;) {
+    Node& n = nodes_[k];
+    Eigen::AlignedBox3f box;
+    if (n.count > 0) {
+      for (int i = n.first; i < n.first + n.count; ++i)
+        box.extend(boxes[size_t(items_[size_t(i)])]);
+    } else {
+      box = nodes_[size_t(n.first)].box.merged(nodes_[size_t(n.first + 1)].box);
+    }
+    n.box = box;
+  }
+}
+
 // Node `node` over items_[begin, end): a leaf, or split at the median of the box centres along
 // the longest axis of their spread (ties by box index, so the split does not depend on the
 // library's nth_element).

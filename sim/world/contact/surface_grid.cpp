@@ -7,7 +7,7 @@ namespace sb {
 
 void SurfaceGrid::build(const std::vector<mesh::Triangle>& triangles, const float* x,
                         const float* y, const float* z, float reach, float cellSize,
-                        const Eigen::AlignedBox3f& region) {
+                        const Eigen::AlignedBox3f& region, bool sameTriangles) {
   reach_ = reach;
   bounds_.setEmpty();
   for (const mesh::Triangle& t : triangles)
@@ -16,9 +16,9 @@ void SurfaceGrid::build(const std::vector<mesh::Triangle>& triangles, const floa
   bounds_.max().array() += reach;
   bounds_ = bounds_.intersection(region);
   allTriangles_.clear();
-  boxTree_.build({});
   if (bounds_.isEmpty() || !bounds_.sizes().allFinite()) {  // no particle can ask: an empty grid
-    bounds_.setEmpty();                                     // contains and intersects nothing
+    boxTree_.build({});
+    bounds_.setEmpty();  // contains and intersects nothing
     dims_.setZero();
     cells_.start.assign(1, 0);
     cells_.items.clear();
@@ -48,7 +48,10 @@ void SurfaceGrid::build(const std::vector<mesh::Triangle>& triangles, const floa
                         : Eigen::AlignedBox3i();  // empty: entered nowhere
     if (!cellBoxes_[t].isEmpty()) allTriangles_.push_back(int(t));
   }
-  boxTree_.build(triangleBoxes_);
+  if (sameTriangles)
+    boxTree_.refit(triangleBoxes_);
+  else
+    boxTree_.build(triangleBoxes_);
   buildCsr(
       dims_.prod(),
       [&](const auto& emit) {

@@ -19,9 +19,12 @@ class SurfaceGrid {
   // overlaps, so candidates(p) holds every triangle within `reach` of p for every p inside
   // `region` (only that part of space is gridded: where the particles that will ask are). Cells
   // are cubes of about `cellSize` metres (> 0), made larger when the grid would exceed
-  // maxCellsPerAxis. Points are #P×3 columns x, y, z.
+  // maxCellsPerAxis. Points are #P×3 columns x, y, z. sameTriangles: the triangles are those of
+  // the last build (the surface moved), so the box tree is refit, not built anew (a speed-up
+  // only: BoxTree::refit).
   void build(const std::vector<mesh::Triangle>& triangles, const float* x, const float* y,
-             const float* z, float reach, float cellSize, const Eigen::AlignedBox3f& region);
+             const float* z, float reach, float cellSize, const Eigen::AlignedBox3f& region,
+             bool sameTriangles = false);
 
   // The bounding box of all triangles grown by the reach, clipped to the region: outside it no
   // triangle is in reach (or the point is outside the region).
