@@ -110,28 +110,48 @@ float rigidInverseMass(const SolverBody& b, const Vec3f& r, const Vec3f& d) {
   return b.invTotalMass + rd.dot(b.invInertia * rd);
 }
 
-// How much the measured velocity along unit d changes per unit impulse along d (C M⁻¹ Cᵀ).
-float measuredInverseMass(const Side& s, const Vec3f& r, const Vec3f& d, bool blended) {
-  if (!s.body || s.body->fixed()) return 0.0f;
-  const float local = localInverseMass(s);
-  const float sh = shareOf(s, blended);
-  if (sh == 0.0f) return local;
+// A side's response to impulses at its point, for the directions of computeInverseMasses: what
+// does not depend on the direction (its particles' own inverse mass and the share of an impulse
+// they carry) once, the rigid inverse mass per direction.
+struct SideResponse {
+  static constexpr int kDirections = 5;  // n, t1, t2 and the tangent diagonals u, w
+  bool moves = false;                    // a body that is not fixed
+  float local = 0;                       // localInverseMass
+  float carried = 0;  // the share of an impulse the particles carry: 0 for pinned, else w
+  float kappa[kDirections] = {};  // rigidInverseMass along each direction
+};
+
+SideResponse responseOf(const Side& s, const Vec3f& r,
+                        const Vec3f (&dirs)[SideResponse::kDirections]) {
+  SideResponse q;
+  if (!s.body || s.body->fixed()) return q;
   const SolverBody& b = *s.body;
-  const float kappa = rigidInverseMass(b, r, d);
-  const float point = (1.0f - sh) * local + sh * kappa;
+  q.moves = true;
+  q.local = localInverseMass(s);
+  for (int c = 0; c < s.count; ++c) q.carried += s.w[c] * b.invMass[s.idx[c]] * b.mass[s.idx[c]];
+  for (int d = 0; d < SideResponse::kDirections; ++d) q.kappa[d] = rigidInverseMass(b, r, dirs[d]);
+  return q;
+}
+
+// How much the measured velocity along direction d changes per unit impulse along it (C M⁻¹ Cᵀ),
+// for constraint A (blended) or B.
+float measuredInverseMass(const Side& s, const SideResponse& q, int d, bool blended) {
+  if (!q.moves) return 0.0f;
+  const float sh = shareOf(s, blended);
+  if (sh == 0.0f) return q.local;
+  const float kappa = q.kappa[d];
+  const float point = (1.0f - sh) * q.local + sh * kappa;
   // The fitted rigid velocity at r changes by the whole impulse (both shares): the particle
   // share carries its momentum into the fit too, at the lever arm r (applyImpulse).
-  float carried = 0;  // the share of the impulse the particles carry: 0 for pinned, else w
-  for (int c = 0; c < s.count; ++c) carried += s.w[c] * b.invMass[s.idx[c]] * b.mass[s.idx[c]];
-  const float fit = (1.0f - sh) * carried * kappa + sh * kappa;
+  const float fit = (1.0f - sh) * q.carried * kappa + sh * kappa;
   return (1.0f - sh) * point + sh * fit;
 }
 
-// How far the particle (point) itself moves per unit impulse of A along d.
-float pointInverseMass(const Side& s, const Vec3f& r, const Vec3f& d) {
-  if (!s.body || s.body->fixed()) return 0.0f;
+// How far the particle (point) itself moves per unit impulse of A along direction d.
+float pointInverseMass(const Side& s, const SideResponse& q, int d) {
+  if (!q.moves) return 0.0f;
   const float sh = s.body->rigidShare;
-  return (1.0f - sh) * localInverseMass(s) + sh * rigidInverseMass(*s.body, r, d);
+  return (1.0f - sh) * q.local + sh * q.kappa[d];
 }
 
 // Applies impulse J (N·s) to the side with the given rigid share. Velocities change by Δv and
@@ -187,21 +207,21 @@ void applyImpulse(const Side& s, const Vec3f& r, const Vec3f& J, float share, fl
 // Effective inverse masses of A and B along n, t1, t2 and the point's own along n, with the
 // sides' current fixed/immovable state.
 void computeInverseMasses(const Side& p, const Side& o, ContactPoint& c) {
-  const Vec3f dirs[3] = {c.normal, c.tangent1, c.tangent2};
   // The tangent coupling by polarisation: q(d) = dᵀKd along the diagonals u, w of the tangent
   // basis gives K₁₂ = (q(u) − q(w)) / 2.
   const Vec3f u = (c.tangent1 + c.tangent2) * std::sqrt(0.5f);
   const Vec3f w = (c.tangent1 - c.tangent2) * std::sqrt(0.5f);
+  const Vec3f dirs[SideResponse::kDirections] = {c.normal, c.tangent1, c.tangent2, u, w};
+  const SideResponse qp = responseOf(p, c.leverProbe, dirs);
+  const SideResponse qo = responseOf(o, c.leverObstacle, dirs);
   for (int j = 0; j < 2; ++j) {
-    auto q = [&](const Vec3f& d) {
-      return measuredInverseMass(p, c.leverProbe, d, j == 0) +
-             measuredInverseMass(o, c.leverObstacle, d, j == 0);
+    auto q = [&](int d) {
+      return measuredInverseMass(p, qp, d, j == 0) + measuredInverseMass(o, qo, d, j == 0);
     };
-    for (int d = 0; d < 3; ++d) c.inverseMass[j][d] = q(dirs[d]);
-    c.tangentCoupling[j] = 0.5f * (q(u) - q(w));
+    for (int d = 0; d < 3; ++d) c.inverseMass[j][d] = q(d);
+    c.tangentCoupling[j] = 0.5f * (q(3) - q(4));
   }
-  c.pointInverseMass =
-      pointInverseMass(p, c.leverProbe, c.normal) + pointInverseMass(o, c.leverObstacle, c.normal);
+  c.pointInverseMass = pointInverseMass(p, qp, 0) + pointInverseMass(o, qo, 0);
 }
 
 // How fast the two bodies' rigid motions (their momentum fits) bring the contact's sides together
