@@ -70,6 +70,7 @@ void rebindRenderMesh(Scene& scene, int body, const cage::EmbeddingMethod& metho
                              std::to_string(render->embedding->meshVertexCount()) +
                              " vertices, the scene loaded " +
                              std::to_string(b.render->embedding->meshVertexCount()));
+  prepareRigidFollow(*render, points, cage.vertices);
   // The swap: both fields at once, neither can throw.
   b.render = std::move(render);
   b.embedding = method;

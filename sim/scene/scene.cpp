@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "sim/base/file_io.h"
+#include "sim/base/parallel_for.h"
 #include "sim/cage/cage_cache.h"
 #include "sim/cage/embedding.h"
 #include "sim/cage/interior_points.h"
@@ -484,6 +485,7 @@ SceneBody parseBody(Fields& f, const std::string& baseDir, BodyDef& def, BoundMe
     } catch (const std::exception& e) {
       f.fail("mesh", std::string("cannot bind the render mesh to this cage: ") + e.what());
     }
+    if (!sb.latticeFrame) prepareRigidFollow(*render, detail.vertices, mesh.vertices);
     bound[renderKey] = render;
     sb.render = std::move(render);
   }
@@ -951,11 +953,26 @@ void saveScene(const Scene& scene, const std::string& path) {
   }
 }
 
+void prepareRigidFollow(RenderMesh& render, const std::vector<Vec3>& meshVertices,
+                        const std::vector<Vec3>& cageVertices) {
+  render.rigidFollow.reset();
+  if (!render.embedding) return;
+  auto asPoints = [](const std::vector<Vec3>& v) {
+    PointsRowMajor p(static_cast<Eigen::Index>(v.size()), 3);
+    for (size_t i = 0; i < v.size(); ++i) p.row(Eigen::Index(i)) = v[i].transpose().cast<float>();
+    return p;
+  };
+  render.rigidFollow =
+      cage::RigidFollow::make(*render.embedding, asPoints(cageVertices), asPoints(meshVertices));
+}
+
 void Scene::renderVertices(int body, PointsRowMajor& out) const {
   const SceneBody& b = bodies.at(size_t(body));
   const ConstPointsRef particles = world.positions(b.handle);
   if (b.render) {
-    b.render->embedding->deform(particles.topRows(b.cageVertexCount), out);
+    const ConstPointsRef cage = particles.topRows(b.cageVertexCount);
+    if (b.render->rigidFollow && b.render->rigidFollow->follow(cage, out)) return;
+    b.render->embedding->deform(cage, out);
   } else {
     out = particles;
   }
@@ -970,18 +987,32 @@ void Scene::renderVertices(const std::vector<int>& which,
     std::vector<PointsRowMajor*> outs;
   };
   std::vector<Group> groups;
+  if (outs.size() != which.size())
+    throw std::invalid_argument("Scene::renderVertices: " + std::to_string(which.size()) +
+                                " bodies but " + std::to_string(outs.size()) + " outputs");
+  for (int i : which) (void)bodies.at(size_t(i));
+  // Bodies whose cages moved as a whole first, in parallel (each writes its own output).
+  std::vector<char> followed(which.size(), 0);
+  parallelFor(static_cast<int>(which.size()), 2, [&](int k) {
+    const SceneBody& b = bodies[size_t(which[size_t(k)])];
+    if (!b.render || !b.render->rigidFollow) return;
+    const ConstPointsRef cage = world.positions(b.handle).topRows(b.cageVertexCount);
+    followed[size_t(k)] = b.render->rigidFollow->follow(cage, *outs[size_t(k)]);
+  });
   for (size_t k = 0; k < which.size(); ++k) {
+    if (followed[k]) continue;
     const SceneBody& b = bodies.at(size_t(which[k]));
     const ConstPointsRef particles = world.positions(b.handle);
     if (!b.render) {
       *outs.at(k) = particles;
       continue;
     }
+    const ConstPointsRef cage = particles.topRows(b.cageVertexCount);
     const cage::Embedding* e = b.render->embedding.get();
     auto g = std::find_if(groups.begin(), groups.end(),
                           [&](const Group& group) { return group.embedding == e; });
     if (g == groups.end()) g = groups.insert(groups.end(), Group{e, {}, {}});
-    g->cages.push_back(particles.topRows(b.cageVertexCount));
+    g->cages.push_back(cage);
     g->outs.push_back(outs.at(k));
   }
   for (const Group& g : groups) g.embedding->deformMany(g.cages, g.outs);

@@ -17,6 +17,7 @@
 #include "sim/cage/auto_cage.h"
 #include "sim/cage/bind.h"
 #include "sim/cage/ffd_lattice.h"
+#include "sim/cage/rigid_follow.h"
 #include "sim/world/world.h"
 
 namespace sb {
@@ -37,7 +38,15 @@ struct RenderMesh {
   std::string path;                                  // as written in the scene file
   std::vector<std::array<int, 3>> triangles;         // indices into the mesh vertices
   std::shared_ptr<const cage::Embedding> embedding;  // #mesh vertices × #particles
+  // Moves the rest mesh instead of applying the weights when a body's cage moved as a whole
+  // (sim/cage/rigid_follow.h); none when the embedding does not reproduce its rest mesh.
+  std::optional<cage::RigidFollow> rigidFollow;
 };
+
+// Sets render.rigidFollow from the mesh's and the cage's vertices the embedding was bound to
+// (the same frame).
+void prepareRigidFollow(RenderMesh& render, const std::vector<Vec3>& meshVertices,
+                        const std::vector<Vec3>& cageVertices);
 
 // "cage": {"auto": true, ...}: the particles are an automatic cage of the render mesh
 // (sim/cage/auto_cage.h), made on load and cached (sim/cage/cage_cache.h).
@@ -117,8 +126,10 @@ struct Scene {
   World world;
   std::vector<SceneBody> bodies;  // in file order; handles refer into world
 
-  // Current render-mesh vertices of body i (#V×3 rows): W · particle positions. Falls back to
-  // the particle positions when the body has no render mesh.
+  // Current render-mesh vertices of body i (#V×3 rows): W · particle positions, or, when the
+  // cage moved as a whole, the rest mesh moved the same way (RenderMesh::rigidFollow: within
+  // 1e-5 of the cage's size of W · positions). Falls back to the particle positions when the
+  // body has no render mesh.
   void renderVertices(int body, PointsRowMajor& out) const;
   // renderVertices for several bodies at once (outs[k] for bodies[k], all distinct): bodies
   // whose render meshes share a binding are deformed together (cage::Embedding::deformMany:

@@ -67,6 +67,47 @@ TEST(Scene, DefaultSceneLoadsWithBoundRenderMeshes) {
   EXPECT_NE(scene.bodies[0].render, scene.bodies[1].render);
 }
 
+// The default scene after 2 s (its bodies landed and rolling): the rigid bunny's render mesh
+// follows its cage as a whole (cage::RigidFollow), within the stated tolerance of W·x; the soft
+// bodies' take the weights, bit for bit; and the render meshes of all bodies at once are those
+// of one body at a time, bit for bit.
+TEST(Scene, RigidBodiesFollowTheirCagesAndSoftOnesTakeTheWeights) {
+  Scene scene = loadScene(defaultScenePath());
+  for (int s = 0; s < 120; ++s) scene.world.step();
+  std::vector<int> which;
+  std::vector<PointsRowMajor> together(scene.bodies.size());
+  std::vector<PointsRowMajor*> outs;
+  for (size_t i = 0; i < scene.bodies.size(); ++i) {
+    which.push_back(int(i));
+    outs.push_back(&together[i]);
+  }
+  scene.renderVertices(which, outs);
+  int followed = 0;
+  for (size_t i = 0; i < scene.bodies.size(); ++i) {
+    const SceneBody& b = scene.bodies[i];
+    ASSERT_TRUE(b.render && b.render->rigidFollow) << i;
+    const ConstPointsRef cage = scene.world.positions(b.handle).topRows(b.cageVertexCount);
+    PointsRowMajor alone, weighted, probe;
+    scene.renderVertices(int(i), alone);
+    b.render->embedding->deform(cage, weighted);
+    EXPECT_EQ(alone, together[i]) << i;
+    const bool rigid = scene.world.params(b.handle).mode == Mode::Rigid;
+    EXPECT_EQ(b.render->rigidFollow->follow(cage, probe), rigid) << i;
+    if (!rigid) {
+      EXPECT_EQ(alone, weighted) << i;
+      continue;
+    }
+    ++followed;
+    const double diagonal = (cage.colwise().maxCoeff() - cage.colwise().minCoeff()).norm();
+    const double rounding = 16.0 * std::numeric_limits<float>::epsilon() *
+                            b.render->rigidFollow->lebesgue() * cage.cwiseAbs().maxCoeff();
+    EXPECT_LE((alone - weighted).rowwise().norm().maxCoeff(),
+              cage::RigidFollow::kTolerance * diagonal + rounding)
+        << i;
+  }
+  EXPECT_EQ(followed, 1);
+}
+
 TEST(Scene, ErrorsNameFileFieldAndReason) {
   expectSceneError("{\n \"bodies\": [\n  {,}\n]}", "line 3");
   expectSceneError("{}", "bodies: is required");
