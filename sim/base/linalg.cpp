@@ -1,6 +1,8 @@
 #include "sim/base/linalg.h"
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+#include <Eigen/SVD>
 #include <cmath>
 
 namespace sb {
@@ -26,5 +28,14 @@ template Eigen::Matrix<double, 3, 3> symmetricPseudoInverse<3>(const Eigen::Matr
                                                                double);
 template Eigen::Matrix<double, 9, 9> symmetricPseudoInverse<9>(const Eigen::Matrix<double, 9, 9>&,
                                                                double);
+
+Eigen::Matrix3d closestRotationSvd(const Eigen::Matrix3d& A) {
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(A, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const Eigen::Matrix3d U = svd.matrixU();
+  const Eigen::Matrix3d V = svd.matrixV();
+  // Flip the direction of the smallest singular value when UVᵀ would be a reflection.
+  const Eigen::Vector3d d(1.0, 1.0, (U * V.transpose()).determinant() < 0.0 ? -1.0 : 1.0);
+  return U * d.asDiagonal() * V.transpose();
+}
 
 }  // namespace sb

@@ -1,11 +1,11 @@
 #include "sim/cage/rigid_follow.h"
 
-#include <Eigen/LU>
-#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <utility>
 #include <vector>
+
+#include "sim/base/linalg.h"
 
 namespace sb::cage {
 
@@ -86,16 +86,13 @@ bool RigidFollow::follow(ConstPointsRef cage, PointsRowMajor& out) const {
   for (int j = 0; j < n; ++j) centre += at(j);
   centre /= double(n);
   if (!centre.allFinite()) return false;
-  // The similarity that fits best in the least-squares sense (Umeyama 1991): R from the SVD of
-  // the cross-covariance, a reflection turned into a rotation, s from the singular values.
+  // The similarity that fits best in the least-squares sense (Umeyama 1991): R the rotation
+  // closest to the cross-covariance H, s = tr(RᵀH) over the rest cage's spread.
   Mat3 H = Mat3::Zero();
   for (int j = 0; j < n; ++j)
     H += (at(j) - centre) * (restCage_.row(j).transpose() - restCentre_).transpose();
-  const Eigen::JacobiSVD<Mat3> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Vec3 d = Vec3::Ones();
-  if ((svd.matrixU() * svd.matrixV().transpose()).determinant() < 0.0) d.z() = -1.0;
-  const Mat3 R = svd.matrixU() * d.asDiagonal() * svd.matrixV().transpose();
-  const double s = svd.singularValues().dot(d) / restSpread_;
+  const Mat3 R = closestRotationSvd(H);
+  const double s = (R.transpose() * H).trace() / restSpread_;  // tr(DΣ), the fitted scale
   const Mat3 sR = s * R;
   const Vec3 t = centre - sR * restCentre_;
   double delta = 0;

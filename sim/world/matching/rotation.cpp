@@ -1,18 +1,8 @@
 #include "sim/world/matching/rotation.h"
 
-#include <Eigen/SVD>
 #include <cmath>
 
 namespace sb {
-
-Mat3 closestRotationSvd(const Mat3& A) {
-  Eigen::JacobiSVD<Mat3> svd(A, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  const Mat3 U = svd.matrixU();
-  const Mat3 V = svd.matrixV();
-  // Flip the direction of the smallest singular value when UVᵀ would be a reflection.
-  Vec3 d(1.0, 1.0, (U * V.transpose()).determinant() < 0.0 ? -1.0 : 1.0);
-  return U * d.asDiagonal() * V.transpose();
-}
 
 bool isClosestRotation(const Mat3& R, const Mat3& A, double relativeTolerance) {
   const double scale = A.norm();

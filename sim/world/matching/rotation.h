@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 
+#include "sim/base/linalg.h"
 #include "sim/base/types.h"
 
 namespace sb {
@@ -17,8 +18,7 @@ namespace sb {
 // `warm` unchanged. Scale-invariant.
 Eigen::Quaterniond closestRotation(const Mat3& A, const Eigen::Quaterniond& warm);
 
-// Sign-corrected SVD: R = U·diag(1, 1, det(UVᵀ))·Vᵀ. The reference solution.
-Mat3 closestRotationSvd(const Mat3& A);
+// The reference solution, the sign-corrected SVD: closestRotationSvd (sim/base/linalg.h).
 
 // True when R is (to a relative tolerance) a global maximiser of tr(RᵀA) over rotations.
 bool isClosestRotation(const Mat3& R, const Mat3& A, double relativeTolerance);
