@@ -990,14 +990,24 @@ void Scene::renderVertices(const std::vector<int>& which,
   if (outs.size() != which.size())
     throw std::invalid_argument("Scene::renderVertices: " + std::to_string(which.size()) +
                                 " bodies but " + std::to_string(outs.size()) + " outputs");
-  for (int i : which) (void)bodies.at(size_t(i));
-  // Bodies whose cages moved as a whole first, in parallel (each writes its own output).
+  // Bodies whose cages moved as a whole first, in parallel (each writes its own output; the
+  // look-ups, which may throw, are made before).
+  struct Candidate {
+    size_t k;
+    const cage::RigidFollow* follow;
+    ConstPointsRef cage;
+  };
+  std::vector<Candidate> candidates;
+  for (size_t k = 0; k < which.size(); ++k) {
+    const SceneBody& b = bodies.at(size_t(which[k]));
+    if (b.render && b.render->rigidFollow)
+      candidates.push_back(
+          {k, &*b.render->rigidFollow, world.positions(b.handle).topRows(b.cageVertexCount)});
+  }
   std::vector<char> followed(which.size(), 0);
-  parallelFor(static_cast<int>(which.size()), 2, [&](int k) {
-    const SceneBody& b = bodies[size_t(which[size_t(k)])];
-    if (!b.render || !b.render->rigidFollow) return;
-    const ConstPointsRef cage = world.positions(b.handle).topRows(b.cageVertexCount);
-    followed[size_t(k)] = b.render->rigidFollow->follow(cage, *outs[size_t(k)]);
+  parallelFor(static_cast<int>(candidates.size()), 2, [&](int c) {
+    const Candidate& cand = candidates[size_t(c)];
+    followed[cand.k] = cand.follow->follow(cand.cage, *outs[cand.k]);
   });
   for (size_t k = 0; k < which.size(); ++k) {
     if (followed[k]) continue;
