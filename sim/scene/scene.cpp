@@ -967,15 +967,7 @@ void prepareRigidFollow(RenderMesh& render, const std::vector<Vec3>& meshVertice
 }
 
 void Scene::renderVertices(int body, PointsRowMajor& out) const {
-  const SceneBody& b = bodies.at(size_t(body));
-  const ConstPointsRef particles = world.positions(b.handle);
-  if (b.render) {
-    const ConstPointsRef cage = particles.topRows(b.cageVertexCount);
-    if (b.render->rigidFollow && b.render->rigidFollow->follow(cage, out)) return;
-    b.render->embedding->deform(cage, out);
-  } else {
-    out = particles;
-  }
+  renderVertices(std::vector<int>{body}, std::vector<PointsRowMajor*>{&out});
 }
 
 void Scene::renderVertices(const std::vector<int>& which,
