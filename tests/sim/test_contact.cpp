@@ -254,6 +254,57 @@ TEST(SurfaceGrid, CellHoldsEveryTriangleWithinReach) {
   }
 }
 
+// The look-ups skip a triangle when its lower bound exceeds the distance to beat, so the bound
+// must never exceed the squared distance the exact test computes in float (or a skipped triangle
+// could have been the closest): checked for every triangle of a tilted bunny cage, near the origin
+// and 60 m from it (where float rounding of a plane distance is largest), and for a collapsed
+// triangle. The plane must also earn its place: for many points it is tighter than the box.
+TEST(SurfaceGrid, DistanceLowerBoundNeverExceedsTheExactTest) {
+  const Mat3 tilt = Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()).toRotationMatrix();
+  for (const Vec3& centre : {Vec3(0.1, 0.2, -0.1), Vec3(60, 3, -45)}) {
+    Shape s = bunnyCage(0.1, centre, tilt);
+    // A collapsed triangle: three points on a line (no plane).
+    const int base = int(s.points.size());
+    for (double t : {0.0, 0.3, 1.0}) s.points.push_back(centre + t * Vec3(0.05, 0.02, 0.01));
+    s.triangles.push_back({base, base + 1, base + 2});
+    const int n = int(s.points.size());
+    Eigen::Matrix<float, Eigen::Dynamic, 3> x(n, 3);
+    for (int i = 0; i < n; ++i) x.row(i) = s.points[size_t(i)].transpose().cast<float>();
+    const Eigen::AlignedBox3f region(centre.cast<float>().array() - 0.15f,
+                                     centre.cast<float>().array() + 0.15f);
+    SurfaceGrid grid;
+    grid.build(s.triangles, x.col(0).data(), x.col(1).data(), x.col(2).data(), 0.02f, 0.02f,
+               region);
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(0, 1);
+    long tighter = 0, pairs = 0;
+    for (int trial = 0; trial < 1500; ++trial) {
+      const Vec3f p = region.min() +
+                      test::drawVector<Vec3f>([&] { return u(rng); }).cwiseProduct(region.sizes());
+      const Eigen::Array4f p4 = SurfaceGrid::lanes(p);
+      for (size_t t = 0; t < s.triangles.size(); ++t) {
+        const Vec3f a = x.row(s.triangles[t][0]), b = x.row(s.triangles[t][1]),
+                    c = x.row(s.triangles[t][2]);
+        const mesh::TrianglePoint<float> q = mesh::closestPointOnTriangle(p, a, b, c);
+        const float exact =
+            (p - (q.weights[0] * a + q.weights[1] * b + q.weights[2] * c)).squaredNorm();
+        const float bound = grid.distanceLowerBoundSquared(int(t), p4);
+        Eigen::AlignedBox3f box;
+        for (const Vec3f& v : {a, b, c}) box.extend(v);
+        const float boxOnly = box.squaredExteriorDistance(p);
+        // The box part may exceed the float exact test by rounding (as it always could: the
+        // float closest point is not exactly on the triangle); the plane part must not.
+        if (bound > boxOnly) {
+          ASSERT_LE(bound, exact) << "triangle " << t << " point " << p.transpose();
+        }
+        tighter += bound > 1.5f * boxOnly + 1e-8f;
+        ++pairs;
+      }
+    }
+    EXPECT_GT(tighter, pairs / 25) << "the plane rarely beats the box";
+  }
+}
+
 // The box hierarchy's nearest-first search, with the bound lowered to each closer box found,
 // finds the box a pass over all boxes finds (nearest, ties to the lower index), visits every box
 // that the final bound admits, and on a bunny's triangle boxes visits a small part of them.

@@ -79,17 +79,17 @@ void closestOnSurface(const ContactGeometry& obstacle, const Vec3f& p, Closest& 
       bound = drift > 0.0f ? (d + drift) * (d + drift) : best.distanceSquared;
     }
   };
-  const Eigen::Array4f p4(p.x(), p.y(), p.z(), 0.0f);
+  const Eigen::Array4f p4 = SurfaceGrid::lanes(p);
   if (!grid.boxTree().empty()) {
     grid.boxTree().visitNear(
         p, [&] { return bound; },
         [&](int t) {
-          if (!(grid.boxDistanceSquared(t, p4) > bound)) take(t);
+          if (!(grid.distanceLowerBoundSquared(t, p4) > bound)) take(t);
         });
   } else {
     const bool haveBoxes = !grid.empty();
     for (int t = 0; t < int(obstacle.triangles->size()); ++t)
-      if (!haveBoxes || !(grid.boxDistanceSquared(t, p4) > bound)) take(t);
+      if (!haveBoxes || !(grid.distanceLowerBoundSquared(t, p4) > bound)) take(t);
   }
 }
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace sb {
 
@@ -9,9 +10,10 @@ void SurfaceGrid::build(const std::vector<mesh::Triangle>& triangles, const floa
                         const float* y, const float* z, float reach, float cellSize,
                         const Eigen::AlignedBox3f& region, bool sameTriangles) {
   reach_ = reach;
-  bounds_.setEmpty();
+  Eigen::AlignedBox3f surfaceBox;
   for (const mesh::Triangle& t : triangles)
-    for (int i : t) bounds_.extend(Vec3f(x[i], y[i], z[i]));
+    for (int i : t) surfaceBox.extend(Vec3f(x[i], y[i], z[i]));
+  bounds_ = surfaceBox;
   bounds_.min().array() -= reach;
   bounds_.max().array() += reach;
   bounds_ = bounds_.intersection(region);
@@ -34,13 +36,24 @@ void SurfaceGrid::build(const std::vector<mesh::Triangle>& triangles, const floa
 
   cellBoxes_.resize(triangles.size());
   triangleBoxes_.resize(triangles.size());
-  paddedBoxes_.resize(triangles.size());
+  triangleBounds_.resize(triangles.size());
+  // The points that ask lie within the region, the triangles within their bounds.
+  float magnitude = 0;
+  for (const Eigen::AlignedBox3f& b : {region, surfaceBox})
+    magnitude = std::max({magnitude, b.min().cwiseAbs().maxCoeff(), b.max().cwiseAbs().maxCoeff()});
+  planeTolerance_ = 32.0f * std::numeric_limits<float>::epsilon() * magnitude;
   for (size_t t = 0; t < triangles.size(); ++t) {
     Eigen::AlignedBox3f box;
     for (int i : triangles[t]) box.extend(Vec3f(x[i], y[i], z[i]));
     triangleBoxes_[t] = box;
-    paddedBoxes_[t] = {Eigen::Array4f(box.min().x(), box.min().y(), box.min().z(), 0.0f),
-                       Eigen::Array4f(box.max().x(), box.max().y(), box.max().z(), 0.0f)};
+    const mesh::Triangle& f = triangles[t];
+    const Vec3f a(x[f[0]], y[f[0]], z[f[0]]);
+    Vec3f n = (Vec3f(x[f[1]], y[f[1]], z[f[1]]) - a).cross(Vec3f(x[f[2]], y[f[2]], z[f[2]]) - a);
+    const float length = n.norm();
+    n = length > 0.0f ? Vec3f(n / length) : Vec3f::Zero();  // collapsed: no plane bound
+    triangleBounds_[t] = {Eigen::Array4f(box.min().x(), box.min().y(), box.min().z(), 1.0f),
+                          Eigen::Array4f(box.max().x(), box.max().y(), box.max().z(), 1.0f),
+                          Eigen::Array4f(n.x(), n.y(), n.z(), -n.dot(a))};
     box.min().array() -= reach;
     box.max().array() += reach;
     cellBoxes_[t] = box.intersects(bounds_)
