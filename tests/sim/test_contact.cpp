@@ -254,6 +254,53 @@ TEST(SurfaceGrid, CellHoldsEveryTriangleWithinReach) {
   }
 }
 
+// With a look-ahead the cells hold every triangle within reach + lookAhead, and a look-up visits
+// every triangle within reach + extra of the point, for extra below the look-ahead (one cell)
+// and above it (several), for points inside the grid's bounds and outside them. (The points are
+// at least the largest extra inside the region, as the Contacts phase grows its regions by how
+// far particles look.)
+TEST(SurfaceGrid, LookAheadKeepsEveryTriangleWithinReachInSight) {
+  const Shape s = bunnyCage(0.1, Vec3(3, 1, -2));
+  const int n = int(s.points.size());
+  Eigen::Matrix<float, Eigen::Dynamic, 3> x(n, 3);
+  for (int i = 0; i < n; ++i) x.row(i) = s.points[size_t(i)].transpose().cast<float>();
+  const float reach = 0.02f, lookAhead = 0.03f;
+  SurfaceGrid grid;
+  const Eigen::AlignedBox3f region(Vec3f(2.5f, 0.5f, -2.5f), Vec3f(3.2f, 1.2f, -1.6f));
+  grid.build(s.triangles, x.col(0).data(), x.col(1).data(), x.col(2).data(), reach, 0.05f, region,
+             false, lookAhead);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(0, 1);
+  const Eigen::AlignedBox3f inner(region.min().array() + 0.07f, region.max().array() - 0.07f);
+  long singleCell = 0, checked = 0;
+  for (int trial = 0; trial < 1500; ++trial) {
+    const Vec3f p =
+        inner.min() + test::drawVector<Vec3f>([&] { return u(rng); }).cwiseProduct(inner.sizes());
+    const SurfaceGrid::Range r = grid.candidates(p);
+    const std::vector<int> cell(r.begin, r.end);
+    for (float extra : {0.0f, 0.01f, 0.03f, 0.07f}) {
+      std::vector<char> seen(s.triangles.size(), 0);
+      grid.forEachNear(
+          p, extra, [] { return std::numeric_limits<float>::infinity(); },
+          [&](int t) { seen[size_t(t)] = 1; });
+      for (size_t t = 0; t < s.triangles.size(); ++t) {
+        const double d = pointTriangleDistance(
+            p.cast<double>(), s.points[size_t(s.triangles[t][0])],
+            s.points[size_t(s.triangles[t][1])], s.points[size_t(s.triangles[t][2])]);
+        if (d > (reach + extra) * 0.999) continue;
+        ASSERT_TRUE(seen[size_t(t)]) << "triangle " << t << " at " << d << " m, extra " << extra;
+        ++checked;
+        if (extra == 0.0f && grid.bounds().contains(p)) {
+          ASSERT_TRUE(std::binary_search(cell.begin(), cell.end(), int(t)));
+          ++singleCell;
+        }
+      }
+    }
+  }
+  EXPECT_GT(checked, 2000);  // the points came near the surface often enough to mean something
+  EXPECT_GT(singleCell, 200);
+}
+
 // The look-ups skip a triangle when its lower bound exceeds the distance to beat, so the bound
 // must never exceed the squared distance the exact test computes in float (or a skipped triangle
 // could have been the closest): checked for every triangle of a tilted bunny cage, near the origin

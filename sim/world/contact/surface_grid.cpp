@@ -8,8 +8,9 @@ namespace sb {
 
 void SurfaceGrid::build(const std::vector<mesh::Triangle>& triangles, const float* x,
                         const float* y, const float* z, float reach, float cellSize,
-                        const Eigen::AlignedBox3f& region, bool sameTriangles) {
+                        const Eigen::AlignedBox3f& region, bool sameTriangles, float lookAhead) {
   reach_ = reach;
+  lookAhead_ = lookAhead;
   Eigen::AlignedBox3f surfaceBox;
   for (const mesh::Triangle& t : triangles)
     for (int i : t) surfaceBox.extend(Vec3f(x[i], y[i], z[i]));
@@ -54,8 +55,8 @@ void SurfaceGrid::build(const std::vector<mesh::Triangle>& triangles, const floa
     triangleBounds_[t] = {Eigen::Array4f(box.min().x(), box.min().y(), box.min().z(), 1.0f),
                           Eigen::Array4f(box.max().x(), box.max().y(), box.max().z(), 1.0f),
                           Eigen::Array4f(n.x(), n.y(), n.z(), -n.dot(a))};
-    box.min().array() -= reach;
-    box.max().array() += reach;
+    box.min().array() -= reach + lookAhead;
+    box.max().array() += reach + lookAhead;
     cellBoxes_[t] = box.intersects(bounds_)
                         ? Eigen::AlignedBox3i(cellOf(box.min()), cellOf(box.max()))
                         : Eigen::AlignedBox3i();  // empty: entered nowhere

@@ -22,10 +22,11 @@ class SurfaceGrid {
   // are cubes of about `cellSize` metres (> 0), made larger when the grid would exceed
   // maxCellsPerAxis. Points are #P×3 columns x, y, z. sameTriangles: the triangles are those of
   // the last build (the surface moved), so the box tree is refit, not built anew (a speed-up
-  // only: BoxTree::refit).
+  // only: BoxTree::refit). lookAhead (metres, ≥ 0): cells also hold the triangles within
+  // reach + lookAhead, so a look-up (forEachNear) with extra ≤ lookAhead reads one cell.
   void build(const std::vector<mesh::Triangle>& triangles, const float* x, const float* y,
              const float* z, float reach, float cellSize, const Eigen::AlignedBox3f& region,
-             bool sameTriangles = false);
+             bool sameTriangles = false, float lookAhead = 0.0f);
 
   // The bounding box of all triangles grown by the reach, clipped to the region: outside it no
   // triangle is in reach (or the point is outside the region).
@@ -42,7 +43,8 @@ class SurfaceGrid {
   // Calls visit(t) for the triangles t that may lie within reach() + extra of p (extra ≥ 0,
   // metres) and whose build-time box and plane are within sqrt(bound()) of p; bound() (m²) is read
   // again after each visit, so a search for the closest triangle can lower it as it goes. A
-  // triangle may come up more than once. Looks at the cells that overlap p ± extra; when those are
+  // triangle may come up more than once. Looks at p's cell when extra ≤ the build's lookAhead,
+  // else at the cells that overlap p ± (extra − lookAhead); when those are
   // more than maxCellsPerLookup (a fast particle, a long sub-step), it searches every triangle's
   // box nearest first in the box tree instead (without a tree — a non-finite position — it passes
   // over the gridded triangles once): a look-up never costs more than maxCellsPerLookup cells or
@@ -83,6 +85,7 @@ class SurfaceGrid {
  private:
   Eigen::AlignedBox3f bounds_;
   float reach_ = 0;
+  float lookAhead_ = 0;
   Vec3f origin_ = Vec3f::Zero();
   float invCell_ = 1.0f;
   Eigen::Vector3i dims_ = Eigen::Vector3i::Zero();
@@ -116,14 +119,15 @@ void SurfaceGrid::forEachNear(const Vec3f& p, float extra, const Bound& bound,
     for (const int* t = begin; t != end; ++t)
       if (!(distanceLowerBoundSquared(*t, p4) > bound())) visit(*t);
   };
-  if (extra <= 0.0f) {
-    const Range r = candidates(p);
-    visitRange(r.begin, r.end);
-    return;
-  }
-  const Eigen::AlignedBox3f box(p.array() - extra, p.array() + extra);
-  if (!box.intersects(bounds_)) return;
-  const Eigen::Vector3i lo = cellOf(box.min()), hi = cellOf(box.max());
+  // Every triangle within reach + extra of p has its grown box (reach + lookAhead) within
+  // extra − lookAhead of p, so it is entered in a cell overlapping p ± (extra − lookAhead) and
+  // bounds() (the three boxes meet pairwise, so they meet: cellOf clamps to bounds()).
+  const float widen = std::max(extra - lookAhead_, 0.0f);  // 0: one cell, with a look-ahead
+  const Eigen::AlignedBox3f reached(p.array() - std::max(extra, 0.0f),
+                                    p.array() + std::max(extra, 0.0f));
+  if (!reached.intersects(bounds_)) return;
+  const Eigen::Vector3i lo = cellOf(Vec3f(p.array() - widen)),
+                        hi = cellOf(Vec3f(p.array() + widen));
   const Eigen::Vector3i span = hi - lo + Eigen::Vector3i::Ones();
   // Entries in those cells, most of them to be rejected by their boxes: a crumpled or folded
   // surface can pack hundreds of triangles into one cell, and the tree then rejects them by the
