@@ -783,10 +783,18 @@ int runSolvePhase(const WorkLayout& layout, const ContactSettings& settings, dou
                   ? Vec3f((-settings.gravity.normalized()).cast<float>())
                   : Vec3f::Zero();
   prepareSoftPairs(softPairs, bodies, solverIndex);
-  parallelFor(islands, minParallel, [&](int i) {
+  // Islands share no movable body, so any order gives the same results: the small ones in
+  // parallel, then each large one on all threads.
+  std::vector<int> small, large;
+  for (int i = 0; i < islands; ++i)
+    (scratch.islandPoints[size_t(i)].size() >= size_t(kMinParallelSweep) ? large : small)
+        .push_back(i);
+  auto solve = [&](int i) {
     solveIsland(bodies, points, scratch.islandBodies[size_t(i)], scratch.islandPoints[size_t(i)],
                 colliders, solver);
-  });
+  };
+  parallelFor(static_cast<int>(small.size()), minParallel, [&](int k) { solve(small[size_t(k)]); });
+  for (int i : large) solve(i);
   parallelFor(nb, minParallel, [&](int b) {
     if (!bodies[size_t(b)].immovable) finishSolverBody(bodies[size_t(b)]);
   });

@@ -2,9 +2,13 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
+#include <climits>
 #include <cmath>
 
+#include "sim/base/parallel_for.h"
 #include "sim/world/contact/friction_cone.h"
+#include "sim/world/contact/sweep_schedule.h"
 #include "sim/world/mass_properties.h"
 
 namespace sb {
@@ -469,10 +473,29 @@ void solveIsland(std::vector<SolverBody>& bodies, std::vector<ContactPoint>& poi
                  const std::vector<int>& bodyList, const std::vector<int>& pointList,
                  const std::vector<Collider>& colliders, const ContactSolverSettings& settings) {
   const float h = settings.h;
-  for (int k : pointList) prepareContact(bodies, points[size_t(k)], settings);
-  for (int k : pointList) warmStart(bodies, points[size_t(k)], h);
-  for (int sweep = 0; sweep < kVelocitySweeps; ++sweep)
-    for (int k : pointList) solveContact(bodies, points[size_t(k)], h);
+  // Sweeps in pointList order, on all threads for a large island (the same results).
+  const int count = static_cast<int>(pointList.size());
+  const bool parallel = count >= kMinParallelSweep && threadCount() > 1;
+  SweepSchedule schedule;
+  if (parallel)
+    schedule.build(count, static_cast<int>(bodies.size()), threadCount(), [&](int q) {
+      const ContactPoint& c = points[size_t(pointList[size_t(q)])];
+      auto writes = [&](int b) { return b >= 0 && !bodies[size_t(b)].immovable ? b : -1; };
+      return std::array<int, 2>{writes(c.probe), writes(c.obstacle)};
+    });
+  auto sweep = [&](const auto& visit) {
+    if (parallel)
+      schedule.run([&](int q) { visit(points[size_t(pointList[size_t(q)])]); });
+    else
+      for (int k : pointList) visit(points[size_t(k)]);
+  };
+  // Preparing only reads the bodies.
+  parallelFor(count, parallel ? 2 : INT32_MAX, [&](int q) {
+    prepareContact(bodies, points[size_t(pointList[size_t(q)])], settings);
+  });
+  sweep([&](ContactPoint& c) { warmStart(bodies, c, h); });
+  for (int s = 0; s < kVelocitySweeps; ++s)
+    sweep([&](ContactPoint& c) { solveContact(bodies, c, h); });
 
   // Shock propagation, for islands resting on a static collider under gravity: bodies bottom-up
   // along `up`; each body's contacts with what is below it (static colliders, bodies already
@@ -526,11 +549,9 @@ void solveIsland(std::vector<SolverBody>& bodies, std::vector<ContactPoint>& poi
 
   // What is still inside is pushed out without velocity, at a bounded rate.
   for (int b : bodyList) bodies[size_t(b)].turnRotation = rotationOf(bodies[size_t(b)].turn);
-  for (int sweep = 0; sweep < kPositionSweeps; ++sweep)
-    for (int k : pointList) {
-      const ContactPoint& c = points[size_t(k)];
-      pushOut(bodies, c, currentDistance(bodies, c, colliders));
-    }
+  for (int s = 0; s < kPositionSweeps; ++s)
+    sweep(
+        [&](const ContactPoint& c) { pushOut(bodies, c, currentDistance(bodies, c, colliders)); });
   for (int k : pointList) {
     const ContactPoint& c = points[size_t(k)];
     const float load = c.lambda[0] + c.lambda[1];

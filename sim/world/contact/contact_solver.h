@@ -152,6 +152,11 @@ struct ContactSolverSettings {
   Vec3f up = Vec3f::UnitY();  // against gravity (shock propagation order); zero: none
 };
 
+// Islands with at least this many contacts sweep on all threads (sweep_schedule.h), with the
+// same results; below, the fork per level costs more than the second thread saves. Such an island
+// must be solved outside any parallel loop (inside one, the sweeps run on its thread alone).
+inline constexpr int kMinParallelSweep = 2048;
+
 // Solves one island: the bodies `bodyList` (indices into bodies, prepared) and the contacts
 // `pointList` (indices into points, in the order they are swept) that join them. Islands share
 // no body, so they may be solved in parallel. Changes the bodies' velocities and positions
