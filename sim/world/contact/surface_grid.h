@@ -126,8 +126,8 @@ void SurfaceGrid::forEachNear(const Vec3f& p, float extra, const Bound& bound,
   const Eigen::AlignedBox3f reached(p.array() - std::max(extra, 0.0f),
                                     p.array() + std::max(extra, 0.0f));
   if (!reached.intersects(bounds_)) return;
-  const Eigen::Vector3i lo = cellOf(Vec3f(p.array() - widen)),
-                        hi = cellOf(Vec3f(p.array() + widen));
+  const Eigen::Vector3i lo = cellOf(Vec3f(p.array() - widen));
+  const Eigen::Vector3i hi = widen > 0.0f ? cellOf(Vec3f(p.array() + widen)) : lo;
   const Eigen::Vector3i span = hi - lo + Eigen::Vector3i::Ones();
   // Entries in those cells, most of them to be rejected by their boxes: a crumpled or folded
   // surface can pack hundreds of triangles into one cell, and the tree then rejects them by the
