@@ -460,8 +460,9 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
       cs.gridRegion = cs.region;
       cs.gridRegion.min().array() -= kGridSlack * m.spacing;
       cs.gridRegion.max().array() += kGridSlack * m.spacing;
-      // Cells of one spacing: a triangle grown by its reach lands in at most 3×3×3 cells, and a
-      // cell holds a dozen or two triangles (most rejected by their boxes).
+      // Cells of one spacing: a triangle grown by its reach and the look-ahead (about half a
+      // spacing on each side) lands in a few cells per axis, and most of a cell's triangles are
+      // rejected by their bounds without the exact test.
       cs.grid.build(m.surface, x.col(0).data(), x.col(1).data(), x.col(2).data(), reachOf(s),
                     m.spacing, cs.gridRegion, sameSurface, kGridLookAhead * m.spacing);
       cs.gridPositions = x;
