@@ -94,14 +94,26 @@ float shareOf(const Side& s, bool blended) {
   return sh >= 1.0f || s.resting ? 1.0f : 0.0f;
 }
 
-// What constraint A (blended) or B measures at the side's point.
-Vec3f measuredVelocity(const Side& s, const Vec3f& r, bool blended) {
+// What constraint A (blended) or B measures at the side's point, given the point's own velocity
+// v = pointVelocity(s, r).
+Vec3f measuredVelocity(const Side& s, const Vec3f& v, const Vec3f& r, bool blended) {
   if (!s.body) return Vec3f::Zero();
-  const Vec3f v = pointVelocity(s, r);
   const float sh = shareOf(s, blended);
   if (sh == 0.0f) return v;
   return (1.0f - sh) * v + sh * (s.body->fitV + s.body->fitW.cross(r));
 }
+
+// The two sides' point velocities (pointVelocity) during one visit of a contact. Only the
+// visit's own impulses change them (a sweep visits the contacts of a body one after the other),
+// so they are read again only after an impulse: a contact that carries nothing reads its
+// particles once per visit instead of four times.
+struct VisitVelocities {
+  Vec3f probe, obstacle;
+  void read(const Side& p, const Side& o, const ContactPoint& c) {
+    probe = pointVelocity(p, c.leverProbe);
+    obstacle = pointVelocity(o, c.leverObstacle);
+  }
+};
 
 float localInverseMass(const Side& s) {
   float k = 0;
@@ -291,7 +303,9 @@ void warmStart(std::vector<SolverBody>& bodies, ContactPoint& c, float h) {
 
 // One visit of constraint A (blended) or B: normal impulse toward the target, then friction in
 // the tangent plane clamped to the cone of the accumulated normal impulse.
-void solveConstraint(const Side& p, const Side& o, ContactPoint& c, bool blended, float h) {
+// `v` holds the sides' point velocities on entry and is kept current.
+void solveConstraint(const Side& p, const Side& o, ContactPoint& c, bool blended, float h,
+                     VisitVelocities& v) {
   const Vec3f& rp = c.leverProbe;
   const Vec3f& ro = c.leverObstacle;
   const Vec3f& n = c.normal;
@@ -300,7 +314,11 @@ void solveConstraint(const Side& p, const Side& o, ContactPoint& c, bool blended
   if (!(k > 0.0f)) return;
   const float sp = shareOf(p, blended), so = o.body ? shareOf(o, blended) : 0.0f;
   float& lambda = c.lambda[j];
-  const float u = (measuredVelocity(p, rp, blended) - measuredVelocity(o, ro, blended)).dot(n);
+  auto measured = [&] {
+    return Vec3f(measuredVelocity(p, v.probe, rp, blended) -
+                 measuredVelocity(o, v.obstacle, ro, blended));
+  };
+  const float u = measured().dot(n);
   // The projection onto the target (λ ≥ 0). A never pushes harder than it takes to bring the
   // particle itself to the target: where the body's rigid motion approaches but the particle
   // does not (it is already being compressed), the blended measure would fling the light
@@ -308,7 +326,7 @@ void solveConstraint(const Side& p, const Side& o, ContactPoint& c, bool blended
   // velocity approaches (a step against the projection's) would make energy.
   float nextLambda = std::max(lambda + (c.target - u) / k, 0.0f);
   if (blended && nextLambda > lambda && c.pointInverseMass > 0.0f) {
-    const float up = (pointVelocity(p, rp) - pointVelocity(o, ro)).dot(n);
+    const float up = (v.probe - v.obstacle).dot(n);
     nextLambda =
         std::min(nextLambda, std::max(lambda + (c.target - up) / c.pointInverseMass, lambda));
   }
@@ -317,6 +335,7 @@ void solveConstraint(const Side& p, const Side& o, ContactPoint& c, bool blended
   if (dl != 0.0f) {
     applyImpulse(p, rp, dl * n, sp, h, false);
     applyImpulse(o, ro, -dl * n, so, h, false);
+    v.read(p, o, c);
   }
   // A contact that carries no load and no friction impulse keeps none: the cone's radius μλ is
   // zero, so the visit below would end where it starts. Most visits are of such contacts (about
@@ -324,7 +343,7 @@ void solveConstraint(const Side& p, const Side& o, ContactPoint& c, bool blended
   // contacts), and this skips their slip and cone arithmetic.
   if (lambda == 0.0f && c.tangent[j] == Vec3f::Zero()) return;
   if (!(c.friction > 0.0f)) return;
-  const Vec3f rel = measuredVelocity(p, rp, blended) - measuredVelocity(o, ro, blended);
+  const Vec3f rel = measured();
   const Vec3f& t1 = c.tangent1;
   const Vec3f& t2 = c.tangent2;
   const Eigen::Matrix2f K{{c.inverseMass[j][1], c.tangentCoupling[j]},
@@ -346,12 +365,15 @@ void solveConstraint(const Side& p, const Side& o, ContactPoint& c, bool blended
   const Vec3f dJ = change.x() * t1 + change.y() * t2;
   applyImpulse(p, rp, dJ, sp, h, false);
   applyImpulse(o, ro, -dJ, so, h, false);
+  v.read(p, o, c);
 }
 
 void solveContact(std::vector<SolverBody>& bodies, ContactPoint& c, float h) {
   const Side p = probeSide(bodies, c), o = obstacleSide(bodies, c);
-  solveConstraint(p, o, c, true, h);
-  solveConstraint(p, o, c, false, h);
+  VisitVelocities v;
+  v.read(p, o, c);
+  solveConstraint(p, o, c, true, h, v);
+  solveConstraint(p, o, c, false, h, v);
 }
 
 // Signed distance minus the gap at the current positions, rigid corrections included.
