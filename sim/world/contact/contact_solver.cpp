@@ -5,6 +5,7 @@
 #include <array>
 #include <climits>
 #include <cmath>
+#include <limits>
 
 #include "sim/base/parallel_for.h"
 #include "sim/world/contact/friction_cone.h"
@@ -215,6 +216,11 @@ void applyImpulse(const Side& s, const Vec3f& r, const Vec3f& J, float share, fl
   // 2 rad per sub-step, and the default scene's soft bodies at dt 1 s with one sub-step gained
   // ×10⁴ kinetic energy in five steps.)
   if (!positionsOnly) {
+    // A particle share moves its particles by at most (1 − share)·max(1/m)·|J|; the rest, and the
+    // fitted rigid velocity (which takes the whole impulse), by at most bodyResponse·|J| at any
+    // lever arm. (The 1.001 covers the rounding of this product.)
+    b.measuredChange +=
+        1.001 * double(J.norm()) * double((1.0f - share) * b.particleResponse + b.bodyResponse);
     b.fitV += b.invTotalMass * (carriedLinear + share * J);
     b.fitW += b.invInertia * r.cross(carriedLinear + share * J);
   }
@@ -303,9 +309,10 @@ void warmStart(std::vector<SolverBody>& bodies, ContactPoint& c, float h) {
 
 // One visit of constraint A (blended) or B: normal impulse toward the target, then friction in
 // the tangent plane clamped to the cone of the accumulated normal impulse.
-// `v` holds the sides' point velocities on entry and is kept current.
+// `v` holds the sides' point velocities on entry and is kept current. `slack` takes the minimum
+// with this constraint's idle slack (ContactPoint::idleSlack) as measured on entry.
 void solveConstraint(const Side& p, const Side& o, ContactPoint& c, bool blended, float h,
-                     VisitVelocities& v) {
+                     VisitVelocities& v, float& slack) {
   const Vec3f& rp = c.leverProbe;
   const Vec3f& ro = c.leverObstacle;
   const Vec3f& n = c.normal;
@@ -319,6 +326,15 @@ void solveConstraint(const Side& p, const Side& o, ContactPoint& c, bool blended
                  measuredVelocity(o, v.obstacle, ro, blended));
   };
   const float u = measured().dot(n);
+  {
+    // The margin: u is a few roundings of velocities as large as the two sides' measured ones,
+    // and every impulse since rounded them again; 1e-3 of their size leaves room for a thousand
+    // roundings.
+    const float size = measuredVelocity(p, v.probe, rp, blended).cwiseAbs().sum() +
+                       measuredVelocity(o, v.obstacle, ro, blended).cwiseAbs().sum() +
+                       std::abs(c.target);
+    slack = std::min(slack, u - c.target - 1e-3f * size - 1e-6f);
+  }
   // The projection onto the target (λ ≥ 0). A never pushes harder than it takes to bring the
   // particle itself to the target: where the body's rigid motion approaches but the particle
   // does not (it is already being compressed), the blended measure would fling the light
@@ -368,12 +384,38 @@ void solveConstraint(const Side& p, const Side& o, ContactPoint& c, bool blended
   v.read(p, o, c);
 }
 
-void solveContact(std::vector<SolverBody>& bodies, ContactPoint& c, float h) {
+bool carriesNothing(const ContactPoint& c) {
+  return c.lambda[0] == 0.0f && c.lambda[1] == 0.0f && c.tangent[0] == Vec3f::Zero() &&
+         c.tangent[1] == Vec3f::Zero();
+}
+
+// One visit of both constraints. In the velocity sweeps (mayIdle), a contact that carries
+// nothing and provably would still do nothing (ContactPoint::idleSlack) is skipped: the same
+// results, without reading its particles.
+void solveContact(std::vector<SolverBody>& bodies, ContactPoint& c, float h, bool mayIdle) {
   const Side p = probeSide(bodies, c), o = obstacleSide(bodies, c);
+  const bool idle = carriesNothing(c);
+  auto changeSinceVisit = [&] {
+    return (p.body->measuredChange - c.measuredChangeAtVisit[0]) +
+           (o.body ? o.body->measuredChange - c.measuredChangeAtVisit[1] : 0.0);
+  };
+  if (mayIdle && idle && c.idleSlack > 0.0f && changeSinceVisit() < double(c.idleSlack)) {
+    ++c.skippedVisits;
+    return;
+  }
   VisitVelocities v;
   v.read(p, o, c);
-  solveConstraint(p, o, c, true, h, v);
-  solveConstraint(p, o, c, false, h, v);
+  float slack = std::numeric_limits<float>::infinity();
+  solveConstraint(p, o, c, true, h, v, slack);
+  solveConstraint(p, o, c, false, h, v, slack);
+  // The slack was measured on entry, so it holds only where the visit applied nothing: idle
+  // before and after.
+  c.idleSlack = -1;
+  if (mayIdle && idle && carriesNothing(c)) {
+    c.idleSlack = slack;
+    c.measuredChangeAtVisit[0] = p.body->measuredChange;
+    c.measuredChangeAtVisit[1] = o.body ? o.body->measuredChange : 0.0;
+  }
 }
 
 // Signed distance minus the gap at the current positions, rigid corrections included.
@@ -456,6 +498,15 @@ void prepareSolverBody(SolverBody& b) {
   b.turnRotation.setIdentity();
   b.frozen = false;
   b.load = 0;
+  b.measuredChange = 0;
+  float particleResponse = 0, reach = 0;  // largest 1/m; largest |x − c|²
+  for (int i = 0; i < b.count; ++i) {
+    particleResponse = std::max(particleResponse, b.invMass[i]);
+    reach = std::max(reach, (b.position(i) - b.centre).squaredNorm());
+  }
+  b.particleResponse = particleResponse;
+  // |I⁻¹| by its Frobenius norm, which bounds the spectral one.
+  b.bodyResponse = b.invTotalMass + b.invInertia.norm() * reach;
 }
 
 void finishSolverBody(SolverBody& b) {
@@ -517,7 +568,7 @@ void solveIsland(std::vector<SolverBody>& bodies, std::vector<ContactPoint>& poi
   });
   sweep([&](ContactPoint& c) { warmStart(bodies, c, h); });
   for (int s = 0; s < kVelocitySweeps; ++s)
-    sweep([&](ContactPoint& c) { solveContact(bodies, c, h); });
+    sweep([&](ContactPoint& c) { solveContact(bodies, c, h, settings.skipIdle); });
 
   // Shock propagation, for islands resting on a static collider under gravity: bodies bottom-up
   // along `up`; each body's contacts with what is below it (static colliders, bodies already
@@ -560,7 +611,7 @@ void solveIsland(std::vector<SolverBody>& bodies, std::vector<ContactPoint>& poi
           ContactPoint& c = points[size_t(k)];
           computeInverseMasses(probeSide(bodies, c), obstacleSide(bodies, c), c);
         }
-        for (int k : atLevel[level]) solveContact(bodies, points[size_t(k)], h);
+        for (int k : atLevel[level]) solveContact(bodies, points[size_t(k)], h, false);
       }
       body.frozen = true;
     }
