@@ -624,6 +624,7 @@ int runSolvePhase(const WorkLayout& layout, const ContactSettings& settings, dou
   const std::vector<ContactScratch::Pair>& contactPairs = scratch.pairs;
   scratch.touching.clear();
   scratch.activeContacts = 0;
+  scratch.sweepVisits = scratch.skippedVisits = 0;
   scratch.deepestContact = 0;
   // The bodies of the solve: those with a contact, in creation order.
   std::vector<SolverBody>& bodies = scratch.solverBodies;
@@ -803,6 +804,12 @@ int runSolvePhase(const WorkLayout& layout, const ContactSettings& settings, dou
   runSoftImpacts(scratch, bodies, slots, float(h), threshold);
   if (settings.rollingResistance > 0.0f)
     resistRolling(scratch, bodies, slots, settings.rollingResistance, minParallel);
+
+  for (int i = 0; i < islands; ++i) {
+    scratch.sweepVisits += long(kVelocitySweeps) * long(scratch.islandPoints[size_t(i)].size());
+    for (int k : scratch.islandPoints[size_t(i)])
+      scratch.skippedVisits += points[size_t(k)].skippedVisits;
+  }
 
   // Keep the impulses for the next sub-step; report the pairs that touched and the contacts
   // that carried load.

@@ -102,6 +102,9 @@ struct ContactScratch {
   // This sub-step's body–body narrow phase: point–triangle tests made, and the tests a pass of
   // every probe particle over every obstacle triangle would make (Σ over the pairs looked at).
   long triangleTests = 0, triangleTestsOfAllPairs = 0;
+  // Visits of the velocity sweeps in the last solve, and those skipped as idle
+  // (ContactPoint::idleSlack).
+  long sweepVisits = 0, skippedVisits = 0;
   // Bodies in sweep order, grown boxes and creation rank per slot, obstacle slots.
   std::vector<int> sweep, rank, obstacles;
   std::vector<Eigen::AlignedBox3f> boxes;

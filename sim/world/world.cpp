@@ -153,6 +153,8 @@ void World::Data::substep(double h, StepProfile& prof) {
   timed(Phase::Solve, [&] {
     contactCount = runSolvePhase(layout, contact, h, slots, order, colliders, contactScratch);
   });
+  contactWork.sweepVisits += contactScratch.sweepVisits;
+  contactWork.skippedVisits += contactScratch.skippedVisits;
   // Damping after the contacts: the velocity the contact solve leaves relative to a body's
   // rigid motion (its impulses act on single particles) is damped in the same sub-step.
   timed(Phase::Damping, [&] { runDampingPhase(layout, slots, awake); });

@@ -173,12 +173,14 @@ class World {
   double time() const;  // seconds simulated since creation or reset
   const StepProfile& lastProfile() const;  // phases of the last step() call
   int lastContactCount() const;  // body–body contacts that carried load in the last sub-step
-  // Work of the body–body narrow phase over the last step() (all its sub-steps): the
-  // point–triangle tests made, and those a pass of every probe particle over every triangle of
-  // each obstacle it was paired with would make. The same at any thread count: for tests of how
-  // contact detection scales (no timings).
+  // Work of the contacts over the last step() (all its sub-steps): the body–body narrow phase's
+  // point–triangle tests, and those a pass of every probe particle over every triangle of each
+  // obstacle it was paired with would make; the contact solve's velocity-sweep visits, and those
+  // it skipped because they provably do nothing. The same at any thread count: for tests of how
+  // contacts scale (no timings).
   struct ContactWork {
     long triangleTests = 0, triangleTestsOfAllPairs = 0;
+    long sweepVisits = 0, skippedVisits = 0;
   };
   ContactWork lastContactWork() const;
   // Deepest penetration (m, ≥ 0) of a load-carrying contact (body or collider) of the last

@@ -4,6 +4,8 @@
 // over the timed steps, and steps_per_s for simulation + deform together.
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
+
 #include "sim/base/parallel.h"
 #include "sim/mesh/mesh_io.h"
 #include "sim/scene/scene.h"
@@ -25,6 +27,19 @@ void reportPhases(benchmark::State& state, const RunTotals& totals) {
   state.counters["threads"] = threadCount();
 }
 
+// The share of the contact solve's velocity-sweep visits skipped as provably idle
+// (ContactPoint::idleSlack), over the timed steps, as "idle_skipped_pct".
+struct SweepVisits {
+  long visits = 0, skipped = 0;
+  void add(const World& world) {
+    visits += world.lastContactWork().sweepVisits;
+    skipped += world.lastContactWork().skippedVisits;
+  }
+  void report(benchmark::State& state) const {
+    state.counters["idle_skipped_pct"] = 100.0 * double(skipped) / double(std::max(1L, visits));
+  }
+};
+
 // The shipped large scene (≥ 50 bodies, ≥ 50k render vertices): simulation, collisions and the
 // deform of every render mesh, timed after the first 2 s (the top layer is still landing then).
 void BM_LargeScene(benchmark::State& state) {
@@ -34,8 +49,13 @@ void BM_LargeScene(benchmark::State& state) {
   SceneRunner runner(scene, /*deform=*/true);
   long long renderVertices = 0;
   for (const PointsRowMajor& mesh : runner.renderMeshes()) renderVertices += mesh.rows();
-  for (auto _ : state) runner.step();
+  SweepVisits sweeps;
+  for (auto _ : state) {
+    runner.step();
+    sweeps.add(scene.world);
+  }
   reportPhases(state, runner.totals());
+  sweeps.report(state);
   state.counters["bodies"] = double(scene.bodies.size());
   state.counters["render_vertices"] = double(renderVertices);
   setThreadCount(0);
@@ -57,8 +77,13 @@ void BM_SeedScale(benchmark::State& state) {
   Scene scene = loadScene(kAssets + "/scenes/seed-scale.json");
   for (int s = 0; s < 60; ++s) scene.world.step();
   SceneRunner runner(scene, /*deform=*/true);
-  for (auto _ : state) runner.step();
+  SweepVisits sweeps;
+  for (auto _ : state) {
+    runner.step();
+    sweeps.add(scene.world);
+  }
   reportPhases(state, runner.totals());
+  sweeps.report(state);
   state.counters["bodies"] = double(scene.bodies.size());
   setThreadCount(0);
 }
@@ -148,13 +173,16 @@ void BM_ContactScaling(benchmark::State& state) {
   }
   for (int s = 0; s < 120; ++s) world.step();
   RunTotals totals;
+  SweepVisits sweeps;
   for (auto _ : state) {
     world.step();
     totals.phases += world.lastProfile();
     totals.contacts += world.lastContactCount();
     ++totals.steps;
+    sweeps.add(world);
   }
   reportPhases(state, totals);
+  sweeps.report(state);
   state.counters["contacts_us_per_body"] =
       1e6 * totals.phases[Phase::Contacts] / double(totals.steps) / count;
   setThreadCount(0);

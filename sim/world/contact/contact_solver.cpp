@@ -16,9 +16,7 @@ namespace sb {
 
 namespace {
 
-// Velocity sweeps over an island's contacts (Gauss–Seidel with accumulated impulses), and
-// position sweeps for what is still inside afterwards.
-constexpr int kVelocitySweeps = 8;
+// Position sweeps for what is still inside after the velocity sweeps.
 constexpr int kPositionSweeps = 2;
 // Position-only recovery per contact and sweep, in spacings of the probe body: pushes without
 // velocity are free work, so they are rate-bounded (a pile whose residue was projected out at

@@ -171,6 +171,9 @@ struct ContactSolverSettings {
   bool skipIdle = true;
 };
 
+// Velocity sweeps over an island's contacts (Gauss–Seidel with accumulated impulses).
+inline constexpr int kVelocitySweeps = 8;
+
 // Islands with at least this many contacts sweep on all threads (sweep_schedule.h), with the
 // same results; below, the fork per level costs more than the second thread saves. Such an island
 // must be solved outside any parallel loop (inside one, the sweeps run on its thread alone).
