@@ -307,10 +307,11 @@ void warmStart(std::vector<SolverBody>& bodies, ContactPoint& c, float h) {
 
 // One visit of constraint A (blended) or B: normal impulse toward the target, then friction in
 // the tangent plane clamped to the cone of the accumulated normal impulse.
-// `v` holds the sides' point velocities on entry and is kept current. `slack` takes the minimum
-// with this constraint's idle slack (ContactPoint::idleSlack) as measured on entry.
+// `v` holds the sides' point velocities on entry and is kept current. `slack`, where given,
+// takes the minimum with this constraint's idle slack (ContactPoint::idleSlack) as measured on
+// entry.
 void solveConstraint(const Side& p, const Side& o, ContactPoint& c, bool blended, float h,
-                     VisitVelocities& v, float& slack) {
+                     VisitVelocities& v, float* slack) {
   const Vec3f& rp = c.leverProbe;
   const Vec3f& ro = c.leverObstacle;
   const Vec3f& n = c.normal;
@@ -324,14 +325,14 @@ void solveConstraint(const Side& p, const Side& o, ContactPoint& c, bool blended
                  measuredVelocity(o, v.obstacle, ro, blended));
   };
   const float u = measured().dot(n);
-  {
+  if (slack) {
     // The margin: u is a few roundings of velocities as large as the two sides' measured ones,
     // and every impulse since rounded them again; 1e-3 of their size leaves room for a thousand
     // roundings.
     const float size = measuredVelocity(p, v.probe, rp, blended).cwiseAbs().sum() +
                        measuredVelocity(o, v.obstacle, ro, blended).cwiseAbs().sum() +
                        std::abs(c.target);
-    slack = std::min(slack, u - c.target - 1e-3f * size - 1e-6f);
+    *slack = std::min(*slack, u - c.target - 1e-3f * size - 1e-6f);
   }
   // The projection onto the target (λ ≥ 0). A never pushes harder than it takes to bring the
   // particle itself to the target: where the body's rigid motion approaches but the particle
@@ -403,11 +404,12 @@ void solveContact(std::vector<SolverBody>& bodies, ContactPoint& c, float h, boo
   }
   VisitVelocities v;
   v.read(p, o, c);
+  // The slack is measured on entry, so it holds only where the visit applied nothing: idle
+  // before and after. (Contacts that carry something do not measure it.)
   float slack = std::numeric_limits<float>::infinity();
-  solveConstraint(p, o, c, true, h, v, slack);
-  solveConstraint(p, o, c, false, h, v, slack);
-  // The slack was measured on entry, so it holds only where the visit applied nothing: idle
-  // before and after.
+  float* measureSlack = mayIdle && idle ? &slack : nullptr;
+  solveConstraint(p, o, c, true, h, v, measureSlack);
+  solveConstraint(p, o, c, false, h, v, measureSlack);
   c.idleSlack = -1;
   if (mayIdle && idle && carriesNothing(c)) {
     c.idleSlack = slack;
