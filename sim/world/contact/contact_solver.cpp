@@ -104,8 +104,8 @@ Vec3f measuredVelocity(const Side& s, const Vec3f& v, const Vec3f& r, bool blend
 
 // The two sides' point velocities (pointVelocity) during one visit of a contact. Only the
 // visit's own impulses change them (a sweep visits the contacts of a body one after the other),
-// so they are read again only after an impulse: a contact that carries nothing reads its
-// particles once per visit instead of four times.
+// so they are read again only after an impulse: a contact that carries nothing reads each side's
+// particles once per visit instead of once per constraint.
 struct VisitVelocities {
   Vec3f probe, obstacle;
   void read(const Side& p, const Side& o, const ContactPoint& c) {
