@@ -789,7 +789,7 @@ int sceneRun() {
       if (num("bodies", 0) > 0)  // every body: asleep, centre, lowest particle, fastest particle
         for (BodyHandle b : bs) {
           const Vec3 c = w.centreOfMass(b);
-          std::printf("    %-12s %s c (%.3f %.3f %.3f) lowest %.3f fastest %.3g", w.name(b).c_str(),
+          std::printf("    %-12s %s c (%.5f %.5f %.5f) lowest %.5f fastest %.3g", w.name(b).c_str(),
                       w.isSleeping(b) ? "asleep" : "awake ", c.x(), c.y(), c.z(),
                       w.positions(b).col(1).minCoeff(),
                       w.velocities(b).rowwise().norm().maxCoeff());
