@@ -304,7 +304,11 @@ bool ViewerApp::writeStats() {
       const glm::vec3 a = corner(t, 0), bb = corner(t, 1), cc = corner(t, 2);
       glm::vec2 pixel;
       if (!project((a + bb + cc) / 3.0f, &pixel)) return std::nullopt;
-      pixel = glm::floor(pixel) + 0.5f;
+      // The ray is checked where a press in that pixel picks: the window reports the cursor at
+      // the pixel's corner (whole coordinates), not its centre. Checked at the centre, a pixel on
+      // a body's outline could pass here and a press there miss the body (the pile's bunny 10,
+      // half a pixel inside its top edge).
+      pixel = glm::floor(pixel);
       if (pixel.x < 0 || pixel.y < 0 || pixel.x >= w || pixel.y >= h) return std::nullopt;
       if (pixel.x < view.x + 4.0f) return std::nullopt;  // under the panel
       ++tried;
