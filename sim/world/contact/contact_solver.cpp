@@ -28,6 +28,13 @@ constexpr float kMaxPush = 0.02f;
 // pile at 1/120-s sub-steps came to rest with particles 0.22 spacings deep; at 0.002, the slop,
 // contacts flipped between the two answers and a soft stack still walked 2–15 % of its edge.)
 constexpr float kRestingDepth = 0.01f;
+// And the deepest the sub-step's integration may have taken it, in spacings: a soft body's
+// supports are pulled in by the goals that carry its weight every sub-step (ContactPoint::resting;
+// 3–8 % of a spacing for a bunny on four supports at 1/240 s). Deeper than this it came in on
+// its own and is stopped on its own (without this bound a rigid-mode α 0.5 body on a plane ended
+// steps 0.5 % of a spacing deep and the seed-scale pile 0.33 spacings inside the floor; at 0.1
+// the large scene's bodies crept as before).
+constexpr float kRestingPull = 0.25f;
 
 Eigen::Matrix3f rotationOf(const Vec3f& turn) {
   const float angle = turn.norm();
@@ -258,15 +265,9 @@ void prepareContact(std::vector<SolverBody>& bodies, ContactPoint& c,
                     const ContactSolverSettings& settings) {
   const float h = settings.h;
   Side p = probeSide(bodies, c), o = obstacleSide(bodies, c);
-  c.resting = rigidApproach(p, o, c.normal) <= settings.restingSpeed &&
-              c.distance0 >= -kRestingDepth * p.body->spacing;
-  p.resting = o.resting = c.resting;
   c.leverProbe = leverArm(p);
   c.leverObstacle = leverArm(o);
   const Vec3f& n = c.normal;
-  c.tangent1 = (std::abs(n.x()) < 0.6f ? Vec3f::UnitX() : Vec3f::UnitY()).cross(n).normalized();
-  c.tangent2 = n.cross(c.tangent1);
-  computeInverseMasses(p, o, c);
   // The approach now (after the integration) and where the particle was at the start of the
   // sub-step (positions follow velocities: x = x₀ + h·v): it may come as close as touching at
   // the end of the sub-step; one already inside is stopped, not thrown out. Never a separating
@@ -275,6 +276,20 @@ void prepareContact(std::vector<SolverBody>& bodies, ContactPoint& c,
   // a very soft body that made energy every sub-step until it blew up.)
   const float u0 = (pointVelocity(p, c.leverProbe) - pointVelocity(o, c.leverObstacle)).dot(n);
   const float start = c.distance0 - h * u0;
+  // Resting: judged by how deep the particle is at the start of the sub-step, not after the
+  // integration. A soft body carries its weight to its supports through shape matching's goals,
+  // which lie below them: every sub-step the integration pulls each support millimetres into
+  // what it rests on (3–8 mm at 1/240 s for a bunny on four supports), however still the body
+  // is. Judged after that pull, supports were never resting; B stopped them one by one, fought
+  // A's friction at the same contact (their friction impulses nearly opposite, each at its
+  // cone's limit) and the body walked (docs/design.md §5.5).
+  c.resting = rigidApproach(p, o, n) <= settings.restingSpeed &&
+              start >= -kRestingDepth * p.body->spacing &&
+              c.distance0 >= -kRestingPull * p.body->spacing;
+  p.resting = o.resting = c.resting;
+  c.tangent1 = (std::abs(n.x()) < 0.6f ? Vec3f::UnitX() : Vec3f::UnitY()).cross(n).normalized();
+  c.tangent2 = n.cross(c.tangent1);
+  computeInverseMasses(p, o, c);
   c.target = std::min(-start / h, 0.0f);
   // Bounce only where the surfaces meet within this sub-step, faster than the threshold.
   if (c.restitution > 0.0f && -u0 > settings.restitutionThreshold && c.distance0 < 0.0f)

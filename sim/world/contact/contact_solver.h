@@ -137,7 +137,9 @@ struct ContactPoint {
   float tangentCoupling[2] = {0, 0};
   float pointInverseMass = 0;
   // Whether the bodies' rigid motions approach here no faster than the settings' restingSpeed
-  // and the particle is at most kRestingDepth deep: a resting contact, where B acts on the
+  // and the particle was at most kRestingDepth deep at the start of the sub-step (and at most
+  // kRestingPull after its integration, which pulls a soft body's supports in by the weight
+  // they carry): a resting contact, where B acts on the
   // bodies' rigid motion (as for rigid bodies) instead of the particle alone, so a particle's
   // jitter is not answered by that particle alone. Answered alone, a resting particle pushed
   // out of its body's goal was pulled back in by shape matching in the next sub-step, over and
