@@ -1058,7 +1058,7 @@ TEST(StaticContact, StiffBodyLandsWithoutBouncingOrWandering) {
 // to them through goals below the floor: every sub-step the integration pulls each support
 // 3–8 mm in. Judged by that depth its contacts were never resting, constraint B stopped each
 // support on its own, its friction and A's pulled against each other at their cones' limits, and
-// the body walked 3.5–6 mm per 30 s, for ever (ContactPoint::resting).
+// the body walked 2.0–3.0 mm per 30 s here, for ever (ContactPoint::resting).
 TEST(StaticContact, SoftBodyRestingOnTheFloorDoesNotWalk) {
   struct Case {
     Mode mode;
