@@ -35,6 +35,14 @@ constexpr float kRestingDepth = 0.01f;
 // steps 0.5 % of a spacing deep and the seed-scale pile 0.33 spacings inside the floor; at 0.1
 // the large scene's bodies crept as before).
 constexpr float kRestingPull = 0.25f;
+// A pull deeper than kRestingDepth counts as resting only if it is steady: within this many
+// spacings of the same contact's pull at the last sub-step, when it carried load. The weight a
+// resting body carries pulls its supports in by the same amount every sub-step (to 10⁻⁴ of a
+// spacing for a bunny on the floor); a body that is landing is still being compressed, and its
+// pull grows by 0.5–15 % of a spacing per sub-step. Counted as resting, such a particle was
+// answered through the body's rigid motion, which the landing was already lifting, and sank
+// (the seed-scale pile's first second: particles 5.5 mm, 8 % of a spacing, inside the floor).
+constexpr float kSteadyPull = 0.002f;
 
 Eigen::Matrix3f rotationOf(const Vec3f& turn) {
   const float angle = turn.norm();
@@ -282,10 +290,15 @@ void prepareContact(std::vector<SolverBody>& bodies, ContactPoint& c,
   // what it rests on (3–8 mm at 1/240 s for a bunny on four supports), however still the body
   // is. Judged after that pull, supports were never resting; B stopped them one by one, fought
   // A's friction at the same contact (their friction impulses nearly opposite, each at its
-  // cone's limit) and the body walked (docs/design.md §5.5).
+  // cone's limit) and the body walked (docs/design.md §5.5). A pull deeper than kRestingDepth
+  // must also be steady (kSteadyPull): a landing body's particles are pulled as deep, but deeper
+  // every sub-step.
+  const float spacing = p.body->spacing;
+  const bool steady = c.distance0 >= -kRestingDepth * spacing ||
+                      (c.distance0 >= -kRestingPull * spacing &&
+                       std::abs(c.distance0 - c.warmDistance0) <= kSteadyPull * spacing);
   c.resting = rigidApproach(p, o, n) <= settings.restingSpeed &&
-              start >= -kRestingDepth * p.body->spacing &&
-              c.distance0 >= -kRestingPull * p.body->spacing;
+              start >= -kRestingDepth * spacing && steady;
   p.resting = o.resting = c.resting;
   c.tangent1 = (std::abs(n.x()) < 0.6f ? Vec3f::UnitX() : Vec3f::UnitY()).cross(n).normalized();
   c.tangent2 = n.cross(c.tangent1);
