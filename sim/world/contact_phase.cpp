@@ -725,7 +725,6 @@ int runSolvePhase(const WorkLayout& layout, const ContactSettings& settings, dou
       cp.tangent[j] = it->tangent[j];
     }
     cp.warmResting = it->resting;
-    cp.warmDistance0 = it->distance0;
   }
 
   // Islands: bodies joined by body–body contacts, sleeping bodies (immovable) joining nothing.
@@ -832,7 +831,6 @@ int runSolvePhase(const WorkLayout& layout, const ContactSettings& settings, dou
       w.tangent[j] = cp.tangent[j];
     }
     w.resting = cp.resting;
-    w.distance0 = cp.distance0;
     next.push_back(w);
   }
   std::sort(next.begin(), next.end(), lessKey);
