@@ -260,6 +260,33 @@ bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle,
         continue;
       }
     }
+    if (inside && !deepHit && feature != int(mesh::TriangleFeature::Face)) {
+      // Inside, closest to an edge or a corner: there the surface is concave (the inside points
+      // closest to a convex edge lie on its bisector only). Outside a concave crease is in front
+      // of every face that meets there, and the plane through the crease along the direction to
+      // it is not (a particle 7 mm behind one face met that plane and stayed inside for ever): the
+      // face it is deepest behind is held instead.
+      float worst = 0.0f;
+      Vec3f worstNormal = Vec3f::Zero();
+      forEachNearbyFace(obstacle, best.triangle,
+                        feature >= vertexFeature ? feature - vertexFeature : -1, [&](int t) {
+                          Vec3f n;
+                          float d;
+                          if (!facePlane(obstacle, tris[size_t(t)], p, &n, &d)) return;
+                          const Vec3f a = obstacle.position(tris[size_t(t)][0]);
+                          // Only faces through the closest point.
+                          if (std::abs((best.position - a).dot(n)) > 1e-3f * distance + 1e-6f)
+                            return;
+                          if (d < worst) {
+                            worst = d;
+                            worstNormal = n;
+                          }
+                        });
+      if (worst < 0.0f) {
+        out.push_back({i, best.triangle, best.point.weights, worstNormal, worst});
+        continue;
+      }
+    }
     Vec3f normal;
     if (distance > 1e-6f * obstacle.gap + std::numeric_limits<float>::min()) {
       normal = (inside ? -offset : offset) / distance;
