@@ -88,6 +88,8 @@ struct SolverBody {
   // bounds what the impulse does to the fitted rigid velocity.
   double measuredChange = 0;
   float particleResponse = 0, bodyResponse = 0;
+  // m/s: the fastest the rigid motion moves any particle, |V| + |ω|·R (set by prepareSolverBody).
+  float rigidSpeed = 0;
 
   Vec3f position(int i) const { return Vec3f(x[0][i], x[1][i], x[2][i]); }
   Vec3f velocity(int i) const { return Vec3f(v[0][i], v[1][i], v[2][i]); }
