@@ -37,6 +37,11 @@ constexpr int kDeepSearchEvery = 8;
 // resting (ContactSolverSettings::restingSpeed); 1 m/s: sub-steps up to 51 ms at |g| = 9.81.
 constexpr float kRestingSpeedLimit = 1.0f;
 
+// Whether contacts may rest at sub-steps of h seconds: 2|g|h ≤ kRestingSpeedLimit.
+bool contactsCanRest(const ContactSettings& settings, double h) {
+  return 2.0 * settings.gravity.norm() * h <= kRestingSpeedLimit;
+}
+
 bool lessKey(const ContactScratch::Warm& a, const ContactScratch::Warm& b) {
   return a.key < b.key;
 }
@@ -478,6 +483,7 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
   scratch.pairDeep.assign(contactPairs.size(), 0);
   scratch.pairTests.assign(contactPairs.size(), 0);
   const bool deepRound = scratch.substeps % kDeepSearchEvery == 0;
+  const bool creases = contactsCanRest(settings, h);
   parallelFor(static_cast<int>(contactPairs.size()), minParallel, [&](int k) {
     const ContactScratch::Pair& p = contactPairs[size_t(k)];
     pairContacts[size_t(k)].clear();
@@ -496,8 +502,9 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
     else
       apart = Vec3f(0, p.probe < p.obstacle ? 1.0f : -1.0f, 0);
     std::vector<Contact>& found = pairContacts[size_t(k)];
-    scratch.pairDeep[size_t(k)] = findContacts(probe.geometry, obstacle.geometry, float(h), deep,
-                                               apart, found, &scratch.pairTests[size_t(k)]);
+    scratch.pairDeep[size_t(k)] =
+        findContacts(probe.geometry, obstacle.geometry, float(h), deep, creases, apart, found,
+                     &scratch.pairTests[size_t(k)]);
     // Distances found in the detection's frame, carried back to the actual positions (the
     // solver's start). One side at most is shifted, all of it by the same vector.
     const Vec3f shift = probe.frameShift - obstacle.frameShift;
@@ -778,9 +785,8 @@ int runSolvePhase(const WorkLayout& layout, const ContactSettings& settings, dou
   // at long ones a sub-step's gravity alone is an impact, and particles must be stopped one by
   // one (the seed-scale pile at 1-s sub-steps strayed 0.66–0.84 of a diagonal from its bodies'
   // shapes with resting contacts, 0.6 allowed).
-  const float restingSpeed = float(2.0 * settings.gravity.norm() * h);
-  solver.restingSpeed =
-      restingSpeed <= kRestingSpeedLimit ? restingSpeed : -std::numeric_limits<float>::infinity();
+  solver.restingSpeed = contactsCanRest(settings, h) ? float(2.0 * settings.gravity.norm() * h)
+                                                     : -std::numeric_limits<float>::infinity();
   solver.up = settings.gravity.squaredNorm() > 0.0
                   ? Vec3f((-settings.gravity.normalized()).cast<float>())
                   : Vec3f::Zero();

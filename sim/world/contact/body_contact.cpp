@@ -110,7 +110,8 @@ bool insideSurface(const ContactGeometry& obstacle, const Vec3f& p, long& tests)
 }  // namespace
 
 bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle, float h, bool deep,
-                  const Vec3f& apart, std::vector<Contact>& out, long* triangleTests) {
+                  bool creases, const Vec3f& apart, std::vector<Contact>& out,
+                  long* triangleTests) {
   long tests = 0;
   // Bodies more than halfway into each other (each one's box centre within the other's box, the
   // probe's inside the obstacle): pushed through by others, dragged or spawned into each other.
@@ -260,12 +261,15 @@ bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle,
         continue;
       }
     }
-    if (inside && !deepHit && feature != int(mesh::TriangleFeature::Face)) {
+    if (creases && inside && !deepHit && feature != int(mesh::TriangleFeature::Face)) {
       // Inside, closest to an edge or a corner: there the surface is concave (the inside points
       // closest to a convex edge lie on its bisector only). Outside a concave crease is in front
       // of every face that meets there, and the plane through the crease along the direction to
       // it is not (a particle 7 mm behind one face met that plane and stayed inside for ever): the
-      // face it is deepest behind is held instead.
+      // face it is deepest behind is held instead. Only where contacts can rest (`creases`):
+      // this is for particles lodged at rest, and at 1-s sub-steps, where everything is an
+      // impact, holding face planes left a soft body of the pile 0.37 diagonals from its shape
+      // (0.27 without).
       float worst = 0.0f;
       Vec3f worstNormal = Vec3f::Zero();
       forEachNearbyFace(obstacle, best.triangle,

@@ -65,8 +65,12 @@ struct Contact {
 // neighbours (a box's corner pressed into another box's top face near its edge is pushed back
 // up, not sideways out of the side face a hair away); outside, the adjacent face that separates
 // most (near an edge the direction to the closest point turns sideways within a gap's width,
-// and a resting corner would push its body over the edge). Elsewhere the direction between the
-// particle and its closest point.
+// and a resting corner would push its body over the edge); inside, closest to an edge or a
+// corner (a concave crease), if `creases`: the face there it is deepest behind. Elsewhere the
+// direction between the particle and its closest point.
+//
+// creases: hold crease particles by a face (above); the World sets it at the sub-steps where
+// contacts can rest (ContactSolverSettings::restingSpeed).
 //
 // deep: also search the whole surface for particles inside the obstacle's box that have no
 // triangle in reach (overlapping starts, fast drags); returns whether it found any inside.
@@ -80,6 +84,7 @@ struct Contact {
 // far extent. Checked on deep searches only; a pair found overlapping returns true, so it is
 // searched every sub-step until it no longer is.
 bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle, float h, bool deep,
-                  const Vec3f& apart, std::vector<Contact>& out, long* triangleTests = nullptr);
+                  bool creases, const Vec3f& apart, std::vector<Contact>& out,
+                  long* triangleTests = nullptr);
 
 }  // namespace sb
