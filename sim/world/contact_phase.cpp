@@ -732,6 +732,8 @@ int runSolvePhase(const WorkLayout& layout, const ContactSettings& settings, dou
       cp.tangent[j] = it->tangent[j];
     }
     cp.warmResting = it->resting;
+    cp.warmDistance0 = it->distance0;
+    cp.warmSteadySubsteps = it->steadySubsteps;
   }
 
   // Islands: bodies joined by body–body contacts, sleeping bodies (immovable) joining nothing.
@@ -837,6 +839,8 @@ int runSolvePhase(const WorkLayout& layout, const ContactSettings& settings, dou
       w.tangent[j] = cp.tangent[j];
     }
     w.resting = cp.resting;
+    w.distance0 = cp.distance0;
+    w.steadySubsteps = cp.steadySubsteps;
     next.push_back(w);
   }
   std::sort(next.begin(), next.end(), lessKey);

@@ -92,7 +92,9 @@ struct ContactScratch {
     std::array<int, 3> key;
     float lambda[2];
     Vec3f tangent[2];
-    bool resting;  // ContactPoint::resting when these impulses were found
+    bool resting;        // ContactPoint::resting when these impulses were found
+    float distance0;     // ContactPoint::distance0 then (m)
+    int steadySubsteps;  // ContactPoint::steadySubsteps then
   };
   std::vector<Body> bodies;  // per slot
   std::vector<Pair> pairs;

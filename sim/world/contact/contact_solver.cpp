@@ -36,6 +36,27 @@ constexpr float kHookedCosine = -0.5f;
 // pile at 1/120-s sub-steps came to rest with particles 0.22 spacings deep; at 0.002, the slop,
 // contacts flipped between the two answers and a soft stack still walked 2–15 % of its edge.)
 constexpr float kRestingDepth = 0.01f;
+// And the deepest the sub-step's integration may have taken it, in spacings: a soft body's
+// supports are pulled in by the goals that carry its weight every sub-step (ContactPoint::resting;
+// 3–8 % of a spacing for a bunny on four supports at 1/240 s). Deeper than this it came in on
+// its own and is stopped on its own (without this bound a rigid-mode α 0.5 body on a plane ended
+// steps 0.5 % of a spacing deep and the seed-scale pile 0.33 spacings inside the floor; at 0.1
+// the large scene's bodies crept as before).
+constexpr float kRestingPull = 0.25f;
+// A pull deeper than kRestingDepth counts as resting only if it is steady: within this many
+// spacings of the same contact's pull at the sub-step before, for kSteadySubsteps sub-steps in a
+// row, each of them loaded. The weight a resting body carries pulls its supports in by the same
+// amount every sub-step (to 10⁻⁴ of a spacing for a bunny on the floor); a body that is landing
+// is still being compressed, and its pull grows by 0.5–15 % of a spacing per sub-step. Counted
+// as resting, such a particle was answered through the body's rigid motion, which the landing was
+// already lifting, and sank (the seed-scale pile's first second: particles 5.5 mm, 8 % of a
+// spacing, inside the floor).
+constexpr float kSteadyPull = 0.002f;
+// At the turn of a landing's compression the pull holds still for a sub-step or two while the
+// rebound lifts the body: with one steady sub-step a quadratic bunny dropped 2 m still ended a
+// step 1.2 % of a spacing inside the floor, and a particle of the large scene stayed lodged 0.03
+// spacings deep in another body from 1 s on; with four neither.
+constexpr int kSteadySubsteps = 4;
 
 Eigen::Matrix3f rotationOf(const Vec3f& turn) {
   const float angle = turn.norm();
@@ -266,15 +287,9 @@ void prepareContact(std::vector<SolverBody>& bodies, ContactPoint& c,
                     const ContactSolverSettings& settings) {
   const float h = settings.h;
   Side p = probeSide(bodies, c), o = obstacleSide(bodies, c);
-  c.resting = rigidApproach(p, o, c.normal) <= settings.restingSpeed &&
-              c.distance0 >= -kRestingDepth * p.body->spacing;
-  p.resting = o.resting = c.resting;
   c.leverProbe = leverArm(p);
   c.leverObstacle = leverArm(o);
   const Vec3f& n = c.normal;
-  c.tangent1 = (std::abs(n.x()) < 0.6f ? Vec3f::UnitX() : Vec3f::UnitY()).cross(n).normalized();
-  c.tangent2 = n.cross(c.tangent1);
-  computeInverseMasses(p, o, c);
   // The approach now (after the integration) and where the particle was at the start of the
   // sub-step (positions follow velocities: x = x₀ + h·v): it may come as close as touching at
   // the end of the sub-step; one already inside is stopped, not thrown out. Never a separating
@@ -283,6 +298,28 @@ void prepareContact(std::vector<SolverBody>& bodies, ContactPoint& c,
   // a very soft body that made energy every sub-step until it blew up.)
   const float u0 = (pointVelocity(p, c.leverProbe) - pointVelocity(o, c.leverObstacle)).dot(n);
   const float start = c.distance0 - h * u0;
+  // Resting: judged by how deep the particle is at the start of the sub-step, not after the
+  // integration. A soft body carries its weight to its supports through shape matching's goals,
+  // which lie below them: every sub-step the integration pulls each support millimetres into
+  // what it rests on (3–8 mm at 1/240 s for a bunny on four supports), however still the body
+  // is. Judged after that pull, supports were never resting; B stopped them one by one, fought
+  // A's friction at the same contact (their friction impulses nearly opposite, each at its
+  // cone's limit) and the body walked (docs/design.md §5.5). A pull deeper than kRestingDepth
+  // must also be steady (kSteadyPull, kSteadySubsteps): a landing body's particles are pulled as
+  // deep, but deeper every sub-step.
+  const float spacing = p.body->spacing;
+  c.steadySubsteps = std::abs(c.distance0 - c.warmDistance0) <= kSteadyPull * spacing
+                         ? c.warmSteadySubsteps + 1
+                         : 0;
+  const bool steady =
+      c.distance0 >= -kRestingDepth * spacing ||
+      (c.distance0 >= -kRestingPull * spacing && c.steadySubsteps >= kSteadySubsteps);
+  c.resting = rigidApproach(p, o, n) <= settings.restingSpeed &&
+              start >= -kRestingDepth * spacing && steady;
+  p.resting = o.resting = c.resting;
+  c.tangent1 = (std::abs(n.x()) < 0.6f ? Vec3f::UnitX() : Vec3f::UnitY()).cross(n).normalized();
+  c.tangent2 = n.cross(c.tangent1);
+  computeInverseMasses(p, o, c);
   c.target = std::min(-start / h, 0.0f);
   // Bounce only where the surfaces meet within this sub-step, faster than the threshold.
   if (c.restitution > 0.0f && -u0 > settings.restitutionThreshold && c.distance0 < 0.0f)
