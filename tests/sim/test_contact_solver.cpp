@@ -258,5 +258,92 @@ TEST(ContactSolver, PushesOutAsAWholeWithoutDeforming) {
   }
 }
 
+// Two bodies hooked into each other: a particle of the upper body 5 % of a spacing inside the
+// lower one's top face, pushed up by its contact, and another one 5 % inside its bottom face,
+// pushed down (a thin part of one body gone through a thin part of the other during a landing).
+// The whole-body pushes cancel, so nothing frees them; when both bodies are at rest the soft
+// sides are pushed out locally instead, at the pushes' rate, and a rigid side keeps its shape.
+// A moving body is not pushed locally (local pushes store deformation: ungated, they spread a
+// very soft body of the soak through the pile), nor is a pair whose contacts do not oppose
+// (there the whole-body pushes free it).
+TEST(ContactSolver, HookedBodiesAtRestArePushedApartLocally) {
+  constexpr float kDepth = 0.005f;  // 5 % of the 0.1 m spacing
+  struct Run {
+    float lowerShare;     // rigid share of the lower body (1: rigid)
+    Vec3f upperVelocity;  // of every particle of the upper body (tangential: no approach)
+    bool opposed;         // the second contact pushes the other way
+    bool expectLocalPush;
+  };
+  for (const Run& run :
+       {Run{0.3f, Vec3f::Zero(), true, true}, Run{1.0f, Vec3f::Zero(), true, true},
+        Run{0.3f, Vec3f(0.5f, 0, 0), true, false}, Run{0.3f, Vec3f::Zero(), false, false}}) {
+    std::mt19937 rng(1);
+    Particles lower = cube(0.0f, rng, 0.0f);   // 0.2 m, y in [0, 0.2]
+    lower.triangles = {{2, 7, 3}, {0, 1, 5}};  // top (y = 0.2) and bottom (y = 0)
+    Particles upper;
+    // Particle 0 just under the lower body's top face, particle 1 just above its bottom face
+    // (or, not opposed, also under its top face), two more to give the body extent; its centre
+    // at (0.1, ·, 0.1), so the pushes at particles 0 and 1 turn nothing.
+    upper.add(Vec3f(0.1f, 0.2f - kDepth, 0.1f), run.upperVelocity, 0.25f);
+    upper.add(Vec3f(0.1f, run.opposed ? kDepth : 0.2f - kDepth, 0.1f), run.upperVelocity, 0.25f);
+    upper.add(Vec3f(0.0f, 0.1f, 0.0f), run.upperVelocity, 0.25f);
+    upper.add(Vec3f(0.2f, 0.1f, 0.2f), run.upperVelocity, 0.25f);
+    std::vector<SolverBody> bodies = {lower.view(run.lowerShare), upper.view(0.3f)};
+    std::vector<ContactPoint> points(2);
+    for (int k = 0; k < 2; ++k) {
+      ContactPoint& c = points[size_t(k)];
+      c.probe = 1;
+      c.obstacle = 0;
+      c.particle = k;
+      const bool top = k == 0 || !run.opposed;
+      c.triangle = top ? 0 : 1;
+      c.weights = Vec3f::Constant(1.0f / 3);
+      c.normal = top ? Vec3f::UnitY() : Vec3f(-Vec3f::UnitY());
+      c.distance0 = -kDepth - 0.001f;  // minus the lower body's gap
+    }
+    ContactSolverSettings settings;
+    settings.h = 1.0f / 240;
+    settings.restingSpeed = 0.08f;  // 2|g|h
+    settings.up = Vec3f::Zero();
+    const Particles lowerBefore = lower, upperBefore = upper;
+    solveIsland(bodies, points, {0, 1}, {0, 1}, {}, settings);
+    for (SolverBody& b : bodies) finishSolverBody(b);
+
+    auto at = [](const Particles& p, int i) { return Vec3f(p.x[0][i], p.x[1][i], p.x[2][i]); };
+    // How far the upper body's two contact particles moved apart, along y: 0 for a body moved as
+    // a whole, > 0 where both were pushed out locally (particle 0 up, particle 1 down).
+    const float spread =
+        (at(upper, 0).y() - at(upper, 1).y()) - (at(upperBefore, 0).y() - at(upperBefore, 1).y());
+    // The lower body's shape: its largest change of a pairwise distance.
+    float bent = 0;
+    for (int i = 0; i < 8; ++i)
+      for (int j = i + 1; j < 8; ++j)
+        bent = std::max(bent, std::abs((at(lower, i) - at(lower, j)).norm() -
+                                       (at(lowerBefore, i) - at(lowerBefore, j)).norm()));
+    const std::string what = "lower share " + std::to_string(run.lowerShare) +
+                             (run.upperVelocity.isZero() ? ", at rest" : ", moving") +
+                             (run.opposed ? ", opposed" : ", not opposed");
+    if (run.expectLocalPush) {
+      // Each particle out by up to 2 % of a spacing (the rate), shared with the lower body's
+      // soft side (none when rigid).
+      EXPECT_GT(spread, 0.25f * 0.002f) << what;
+      EXPECT_LE(spread, 2 * 0.002f + 1e-5f) << what;
+      if (run.lowerShare >= 1.0f) {
+        EXPECT_LT(bent, 1e-6f) << what;
+      } else {
+        EXPECT_GT(bent, 1e-5f) << what;
+      }
+    } else {
+      EXPECT_NEAR(spread, 0.0f, 1e-6f) << what;
+      EXPECT_LT(bent, 1e-6f) << what;
+    }
+    // Position pushes only: no velocity from them (the velocity sweeps had nothing to stop).
+    for (int i = 0; i < 4; ++i)
+      EXPECT_EQ(Vec3f(upper.v[0][size_t(i)], upper.v[1][size_t(i)], upper.v[2][size_t(i)]),
+                run.upperVelocity)
+          << what << ", particle " << i;
+  }
+}
+
 }  // namespace
 }  // namespace sb
