@@ -738,22 +738,36 @@ void solveIsland(std::vector<SolverBody>& bodies, std::vector<ContactPoint>& poi
 
   // What is still inside is pushed out without velocity, at a bounded rate.
   for (int b : bodyList) bodies[size_t(b)].turnRotation = rotationOf(bodies[size_t(b)].turn);
-  std::vector<float> beforePush(static_cast<size_t>(count), 0.0f);
-  parallelFor(count, parallel ? 2 : INT32_MAX, [&](int q) {
-    beforePush[size_t(q)] =
-        currentDistance(bodies, points[size_t(pointList[size_t(q)])], colliders);
-  });
+  // Local pushes (below) only between two bodies at rest: where no body contact has both, the
+  // depths before the pushes are not needed.
+  auto atRest = [&](int b) { return bodies[size_t(b)].rigidSpeed <= settings.restingSpeed; };
+  bool mayPushLocally = false;
+  for (int k : pointList) {
+    const ContactPoint& c = points[size_t(k)];
+    if (c.obstacle >= 0 && atRest(c.probe) && atRest(c.obstacle)) {
+      mayPushLocally = true;
+      break;
+    }
+  }
+  std::vector<float> beforePush;
+  if (mayPushLocally) {
+    beforePush.assign(static_cast<size_t>(count), 0.0f);
+    parallelFor(count, parallel ? 2 : INT32_MAX, [&](int q) {
+      beforePush[size_t(q)] =
+          currentDistance(bodies, points[size_t(pointList[size_t(q)])], colliders);
+    });
+  }
   for (int s = 0; s < kPositionSweeps; ++s)
     sweep(
         [&](const ContactPoint& c) { pushOut(bodies, c, currentDistance(bodies, c, colliders)); });
   // Blocked contacts of hooked pairs (pushOutLocally), in pointList order.
-  const std::vector<char> hooked = hookedContacts(bodies, points, pointList, beforePush);
+  const std::vector<char> hooked = mayPushLocally
+                                       ? hookedContacts(bodies, points, pointList, beforePush)
+                                       : std::vector<char>(static_cast<size_t>(count), 0);
   for (int q = 0; q < count; ++q) {
     if (!hooked[size_t(q)]) continue;
     const ContactPoint& c = points[size_t(pointList[size_t(q)])];
-    if (!(bodies[size_t(c.probe)].rigidSpeed <= settings.restingSpeed &&
-          bodies[size_t(c.obstacle)].rigidSpeed <= settings.restingSpeed))
-      continue;
+    if (!(atRest(c.probe) && atRest(c.obstacle))) continue;
     const SolverBody& probe = bodies[size_t(c.probe)];
     const float spacing = probe.spacing > 0.0f ? probe.spacing : kSpacingWithoutSurface;
     const float before = beforePush[size_t(q)];

@@ -138,18 +138,17 @@ struct ContactPoint {
   float inverseMass[2][3] = {{0, 0, 0}, {0, 0, 0}};
   float tangentCoupling[2] = {0, 0};
   float pointInverseMass = 0;
-  // Whether the bodies' rigid motions approach here no faster than the settings' restingSpeed
-  // and the particle was at most kRestingDepth deep at the start of the sub-step (and at most
-  // kRestingPull after its integration, which pulls a soft body's supports in by the weight
-  // they carry; a pull deeper than kRestingDepth must have been as deep, within kSteadyPull, for
+  // Whether the bodies' rigid motions approach here no faster than the settings' restingSpeed and
+  // the particle was at most kRestingDepth deep at the start of the sub-step (and at most
+  // kRestingPull after its integration, which pulls a soft body's supports in by the weight they
+  // carry; a pull deeper than kRestingDepth must have been as deep, within kSteadyPull, for
   // kSteadySubsteps sub-steps, as a resting body's is and a landing body's is not): a resting
-  // contact, where B
-  // acts on the bodies' rigid motion (as for rigid bodies) instead of the particle alone, so a
-  // particle's jitter is not answered by that particle alone. Answered alone, a resting particle
-  // pushed out of its body's goal was pulled back in by shape matching in the next sub-step, over
-  // and over, and those pushes rocked and walked soft stacks (five boxes at α 0.9, sleep off: top
-  // drift 0.8–33 % of the edge in 20 s, now 0.03–0.2 %; docs/design.md §5.5). Impacts keep B on the
-  // particle: it is what dents a soft body.
+  // contact, where B acts on the bodies' rigid motion (as for rigid bodies) instead of the particle
+  // alone, so a particle's jitter is not answered by that particle alone. Answered alone, a resting
+  // particle pushed out of its body's goal was pulled back in by shape matching in the next
+  // sub-step, over and over, and those pushes rocked and walked soft stacks (five boxes at α 0.9,
+  // sleep off: top drift 0.8–33 % of the edge in 20 s, now 0.03–0.2 %; docs/design.md §5.5).
+  // Impacts keep B on the particle: it is what dents a soft body.
   bool resting = false;
   // `resting` of the sub-step the warm start's impulses come from: where it changed on a soft
   // body, B's impulse was found for the whole body and would land on one particle (or the other
