@@ -761,22 +761,22 @@ void solveIsland(std::vector<SolverBody>& bodies, std::vector<ContactPoint>& poi
     sweep(
         [&](const ContactPoint& c) { pushOut(bodies, c, currentDistance(bodies, c, colliders)); });
   // Blocked contacts of hooked pairs (pushOutLocally), in pointList order.
-  const std::vector<char> hooked = mayPushLocally
-                                       ? hookedContacts(bodies, points, pointList, beforePush)
-                                       : std::vector<char>(static_cast<size_t>(count), 0);
-  for (int q = 0; q < count; ++q) {
-    if (!hooked[size_t(q)]) continue;
-    const ContactPoint& c = points[size_t(pointList[size_t(q)])];
-    if (!(atRest(c.probe) && atRest(c.obstacle))) continue;
-    const SolverBody& probe = bodies[size_t(c.probe)];
-    const float spacing = probe.spacing > 0.0f ? probe.spacing : kSpacingWithoutSurface;
-    const float before = beforePush[size_t(q)];
-    if (!(-before > kBlockedDepth * spacing)) continue;
-    const float distance = currentDistance(bodies, c, colliders);
-    const float asked =
-        std::min(-before - kContactSlop * spacing, kPositionSweeps * kMaxPush * spacing);
-    if (-distance > kBlockedDepth * spacing && distance - before < kBlockedProgress * asked)
-      pushOutLocally(bodies, c, distance);
+  if (mayPushLocally) {
+    const std::vector<char> hooked = hookedContacts(bodies, points, pointList, beforePush);
+    for (int q = 0; q < count; ++q) {
+      if (!hooked[size_t(q)]) continue;
+      const ContactPoint& c = points[size_t(pointList[size_t(q)])];
+      if (!(atRest(c.probe) && atRest(c.obstacle))) continue;
+      const SolverBody& probe = bodies[size_t(c.probe)];
+      const float spacing = probe.spacing > 0.0f ? probe.spacing : kSpacingWithoutSurface;
+      const float before = beforePush[size_t(q)];
+      if (!(-before > kBlockedDepth * spacing)) continue;
+      const float distance = currentDistance(bodies, c, colliders);
+      const float asked =
+          std::min(-before - kContactSlop * spacing, kPositionSweeps * kMaxPush * spacing);
+      if (-distance > kBlockedDepth * spacing && distance - before < kBlockedProgress * asked)
+        pushOutLocally(bodies, c, distance);
+    }
   }
   for (int k : pointList) {
     const ContactPoint& c = points[size_t(k)];
