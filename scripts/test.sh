@@ -32,7 +32,7 @@ elif [ "${SOFTBODY_TSAN:-0}" = 1 ]; then
   dir="$root/build/tsan"
   flags=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DSOFTBODY_TSAN=ON
          -DCMAKE_CXX_COMPILER=clang++)
-  export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:history_size=4"
+  export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:history_size=4:suppressions=$root/scripts/tsan.supp"
   # The Xvfb viewer tests are built but not run here: they time real frames, which TSan's
   # slowdown turns into timeouts. viewer_step_thread (label "threads") does run: the viewer's own
   # thread, the step beside the drawing, is checked here.
