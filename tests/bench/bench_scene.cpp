@@ -30,13 +30,17 @@ void reportPhases(benchmark::State& state, const RunTotals& totals) {
 // The share of the contact solve's velocity-sweep visits skipped as provably idle
 // (ContactPoint::idleSlack), over the timed steps, as "idle_skipped_pct".
 struct SweepVisits {
-  long visits = 0, skipped = 0;
+  long visits = 0, skipped = 0, triangleTests = 0, steps = 0;
   void add(const World& world) {
     visits += world.lastContactWork().sweepVisits;
     skipped += world.lastContactWork().skippedVisits;
+    triangleTests += world.lastContactWork().triangleTests;
+    ++steps;
   }
   void report(benchmark::State& state) const {
     state.counters["idle_skipped_pct"] = 100.0 * double(skipped) / double(std::max(1L, visits));
+    state.counters["sweep_visits_per_step"] = double(visits) / double(std::max(1L, steps));
+    state.counters["triangle_tests_per_step"] = double(triangleTests) / double(std::max(1L, steps));
   }
 };
 
