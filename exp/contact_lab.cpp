@@ -819,9 +819,9 @@ int sceneRun() {
   std::printf(
       "peak %.3g m/s; fastest in the last 5 s %.3g m/s; last time >= 1 cm/s: %.2f s; last impact "
       "%.2f s (a particle's: %.2f s); all asleep from %.2f s (of %.0f); CPU %.2f s; last 10 s: "
-      "mean fastest %.3g m/s, %.0f steps >= 1 cm/s\n",
+      "mean fastest %.3g m/s, %.0f steps >= 1 cm/s; state hash %016llx\n",
       peak, peakLate, lastAwake, lastImpact, lastParticleImpact, asleepAt, T, cpuSeconds() - cpu0,
-      lateSum / std::max(1.0, lateSteps), lateMoving);
+      lateSum / std::max(1.0, lateSteps), lateMoving, (unsigned long long)w.stateHash());
   return 0;
 }
 
