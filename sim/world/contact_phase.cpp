@@ -472,10 +472,28 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
                     m.spacing, cs.gridRegion, sameSurface, kGridLookAhead * m.spacing);
       cs.gridPositions = x;
       cs.gridModel = &m;
+      cs.gridBuiltAt = scratch.substeps;
       drift = 0;
     }
     cs.geometry.gridDrift = drift;
   });
+
+  // Each pair's clearances from the last sub-step, if its obstacle's grid is the same.
+  std::vector<ContactScratch::PairClearance>& clearances = scratch.clearancesNext;
+  clearances.resize(contactPairs.size());
+  for (size_t k = 0; k < contactPairs.size(); ++k) {
+    ContactScratch::PairClearance& c = clearances[k];
+    c.key = {contactPairs[k].probe, contactPairs[k].obstacle};
+    c.gridBuiltAt = contactScratch[size_t(c.key.second)].gridBuiltAt;
+    const auto last = std::lower_bound(scratch.clearances.begin(), scratch.clearances.end(), c.key,
+                                       [](const ContactScratch::PairClearance& x,
+                                          const std::pair<int, int>& key) { return x.key < key; });
+    if (last != scratch.clearances.end() && last->key == c.key &&
+        last->gridBuiltAt == c.gridBuiltAt)
+      std::swap(c.probe, last->probe);
+    else
+      c.probe.particles.clear();
+  }
 
   // Narrow phase reads only, so pairs run in parallel.
   std::vector<std::vector<Contact>>& pairContacts = scratch.pairContacts;
@@ -504,7 +522,7 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
     std::vector<Contact>& found = pairContacts[size_t(k)];
     scratch.pairDeep[size_t(k)] =
         findContacts(probe.geometry, obstacle.geometry, float(h), deep, creases, apart, found,
-                     &scratch.pairTests[size_t(k)]);
+                     &scratch.pairTests[size_t(k)], &clearances[size_t(k)].probe);
     // Distances found in the detection's frame, carried back to the actual positions (the
     // solver's start). One side at most is shifted, all of it by the same vector.
     const Vec3f shift = probe.frameShift - obstacle.frameShift;
@@ -527,6 +545,11 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
       if (slots[size_t(s)].sleep.asleep) scratch.wake.push_back(s);
   }
   std::sort(scratch.deepPairs.begin(), scratch.deepPairs.end());
+  std::sort(clearances.begin(), clearances.end(),
+            [](const ContactScratch::PairClearance& x, const ContactScratch::PairClearance& y) {
+              return x.key < y.key;
+            });
+  std::swap(scratch.clearances, clearances);
 }
 
 // Rolling resistance (contact/rolling_resistance.h; docs/design.md §5.5), after the solve and

@@ -70,6 +70,7 @@ struct ContactScratch {
     MatX3f gridPositions;
     Eigen::AlignedBox3f gridRegion;
     const BodyModel* gridModel = nullptr;
+    long long gridBuiltAt = 0;  // the sub-step (ContactScratch::substeps) it was built at
     std::vector<StaticHit> staticHits;
     std::vector<int> nearColliders;  // the colliders its particles are tested against, ascending
     // Where the body-body detection sees a sleeping body: moved by what gravity moves an awake
@@ -101,6 +102,14 @@ struct ContactScratch {
   std::vector<std::vector<Contact>> pairContacts;  // per pair
   std::vector<char> pairDeep;                      // per pair: found deep particles
   std::vector<long> pairTests;                     // per pair: point–triangle tests made
+  // What each pair's look-ups learned (ProbeClearance), kept while the obstacle's grid is: per
+  // pair during a sub-step, then sorted by (probe, obstacle) slots for the next one.
+  struct PairClearance {
+    std::pair<int, int> key;    // (probe, obstacle) slots
+    long long gridBuiltAt = 0;  // the obstacle's grid it holds for (Body::gridBuiltAt)
+    ProbeClearance probe;
+  };
+  std::vector<PairClearance> clearances, clearancesNext;
   // This sub-step's body–body narrow phase: point–triangle tests made, and the tests a pass of
   // every probe particle over every obstacle triangle would make (Σ over the pairs looked at).
   long triangleTests = 0, triangleTestsOfAllPairs = 0;

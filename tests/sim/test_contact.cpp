@@ -392,6 +392,153 @@ TEST(SurfaceGrid, LookAheadKeepsEveryTriangleWithinReachInSight) {
   EXPECT_GT(singleCell, 200);
 }
 
+// A look-up's clearance bounds the distance from the point to every triangle of the surface
+// (ProbeClearance skips look-ups by it): checked against the exact distance to each triangle, for
+// points inside and outside the grid's bounds, at every extra (one cell, several cells), and it
+// must mean something: for points away from the surface it exceeds the reach.
+TEST(SurfaceGrid, ClearanceNeverExceedsTheDistanceToAnyTriangle) {
+  const Shape s = bunnyCage(0.1, Vec3(3, 1, -2));
+  const int n = int(s.points.size());
+  Eigen::Matrix<float, Eigen::Dynamic, 3> x(n, 3);
+  for (int i = 0; i < n; ++i) x.row(i) = s.points[size_t(i)].transpose().cast<float>();
+  const float reach = 0.02f, lookAhead = 0.03f;
+  SurfaceGrid grid;
+  const Eigen::AlignedBox3f region(Vec3f(2.5f, 0.5f, -2.5f), Vec3f(3.2f, 1.2f, -1.6f));
+  grid.build(s.triangles, x.col(0).data(), x.col(1).data(), x.col(2).data(), reach, 0.05f, region,
+             false, lookAhead);
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<float> u(0, 1);
+  // Around the region, so that some points are outside the grid's bounds.
+  const Eigen::AlignedBox3f around(region.min().array() - 0.1f, region.max().array() + 0.1f);
+  long beyondReach = 0, outsideBounds = 0;
+  for (int trial = 0; trial < 1500; ++trial) {
+    const Vec3f p =
+        around.min() + test::drawVector<Vec3f>([&] { return u(rng); }).cwiseProduct(around.sizes());
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const Triangle& t : s.triangles)
+      nearest =
+          std::min(nearest, pointTriangleDistance(p.cast<double>(), s.points[size_t(t[0])],
+                                                  s.points[size_t(t[1])], s.points[size_t(t[2])]));
+    for (float extra : {0.0f, 0.01f, 0.03f, 0.07f}) {
+      float clearance2 = -1;
+      grid.forEachNear(
+          p, extra, [] { return std::numeric_limits<float>::infinity(); }, [](int) {}, &clearance2);
+      ASSERT_GE(clearance2, 0.0f);
+      ASSERT_LE(std::sqrt(double(clearance2)), nearest * (1 + 1e-6) + 1e-7)
+          << p.transpose() << " extra " << extra;
+      if (std::sqrt(clearance2) > reach + lookAhead * 0.5f) ++beyondReach;
+      if (!grid.bounds().contains(p) && clearance2 > 0.0f) ++outsideBounds;
+    }
+  }
+  EXPECT_GT(beyondReach, 1000);
+  EXPECT_GT(outsideBounds, 200);
+}
+
+// ProbeClearance only skips look-ups that would find nothing: a probe cloud around a moving bunny
+// cage, over 48 sub-steps with a deep search every fourth, gives exactly the contacts (and the
+// deep flag) of the same search without it, while making far fewer point–triangle tests. The
+// cloud has particles near the surface, far from it, and deep inside (found by the deep search);
+// some of it jumps now and then, and the surface drifts as the Contacts phase lets a kept grid.
+TEST(BodyContact, KnownClearancesSkipLookUpsWithoutChangingTheContacts) {
+  const Shape s = bunnyCage(1.0, Vec3(0, 0.5, 0));
+  const int n = int(s.points.size());
+  Eigen::Matrix<float, Eigen::Dynamic, 3> x(n, 3);
+  for (int i = 0; i < n; ++i) x.row(i) = s.points[size_t(i)].transpose().cast<float>();
+  const Eigen::Matrix<float, Eigen::Dynamic, 3> gridX = x;
+  const Eigen::MatrixX3f v = Eigen::MatrixX3f::Zero(n, 3);
+  const mesh::SurfaceTopology topology = mesh::buildSurfaceTopology(s.triangles, n);
+  double spacing = 0;
+  for (const Triangle& t : s.triangles)
+    spacing += (s.points[size_t(t[0])] - s.points[size_t(t[1])]).norm();
+  spacing /= double(s.triangles.size());
+  const float h = 1.0f / 240;
+  Eigen::AlignedBox3f box;
+  for (int i = 0; i < n; ++i) box.extend(Vec3f(x.row(i).transpose()));
+  // As the Contacts phase builds it: reach gap + margin, cells of a spacing, a quarter spacing
+  // of look-ahead, over where the probes are.
+  const float gap = 0.01f * float(spacing), margin = 0.25f * float(spacing);
+  const Eigen::AlignedBox3f region(box.min().array() - 0.3f, box.max().array() + 0.3f);
+  SurfaceGrid grid;
+  grid.build(s.triangles, x.col(0).data(), x.col(1).data(), x.col(2).data(), gap + margin,
+             float(spacing), region, false, 0.25f * float(spacing));
+
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(0, 1);
+  const int m = 1200;
+  Eigen::MatrixX3f px(m, 3), pv = Eigen::MatrixX3f::Zero(m, 3);
+  const Eigen::AlignedBox3f cloud(box.min().array() - 0.2f, box.max().array() + 0.2f);
+  for (int i = 0; i < m; ++i)
+    px.row(i) =
+        (cloud.min() + test::drawVector<Vec3f>([&] { return u(rng); }).cwiseProduct(cloud.sizes()))
+            .transpose();
+  ProbeClearance clearance;
+  long testsWith = 0, testsWithout = 0, contacts = 0, deepFound = 0;
+  for (int step = 0; step < 48; ++step) {
+    // The probe: each particle moves a little, and a few jump by up to a spacing.
+    for (int i = 0; i < m; ++i) {
+      const Vec3f dv = test::drawVector<Vec3f>([&] { return u(rng) - 0.5f; });
+      pv.row(i) = (0.4f * dv).transpose();
+      const float jump = u(rng) < 0.02f ? float(spacing) : 0.0f;
+      px.row(i) += (h * pv.row(i).transpose() + jump * dv).transpose();
+    }
+    // The surface: turned and shifted a little about where the grid was built (its drift stays
+    // below the quarter spacing at which the Contacts phase would rebuild the grid).
+    const float angle = 0.02f * std::sin(0.3f * float(step));
+    const Eigen::Matrix3f turn = Eigen::AngleAxisf(angle, Vec3f::UnitY()).toRotationMatrix();
+    const Vec3f centre = box.center();
+    for (int i = 0; i < n; ++i)
+      x.row(i) = (centre + turn * (Vec3f(gridX.row(i).transpose()) - centre) +
+                  Vec3f(0.005f * std::cos(0.5f * float(step)), 0, 0))
+                     .transpose();
+    ContactGeometry obstacle;
+    for (int a = 0; a < 3; ++a) {
+      obstacle.x[a] = x.col(a).data();
+      obstacle.v[a] = v.col(a).data();
+    }
+    obstacle.count = n;
+    obstacle.triangles = &s.triangles;
+    obstacle.topology = &topology;
+    obstacle.grid = &grid;
+    obstacle.gridDrift = std::sqrt((x - gridX).rowwise().squaredNorm().maxCoeff());
+    ASSERT_LT(obstacle.gridDrift, 0.25f * spacing);
+    obstacle.box.setEmpty();
+    for (int i = 0; i < n; ++i) obstacle.box.extend(Vec3f(x.row(i).transpose()));
+    obstacle.gap = gap;
+    obstacle.margin = margin;
+    ContactGeometry probe;
+    for (int a = 0; a < 3; ++a) {
+      probe.x[a] = px.col(a).data();
+      probe.v[a] = pv.col(a).data();
+    }
+    probe.count = m;
+    probe.box.setEmpty();
+    for (int i = 0; i < m; ++i) probe.box.extend(Vec3f(px.row(i).transpose()));
+    probe.maxRelativeSpeed = pv.rowwise().norm().maxCoeff();
+    const bool deep = step % 4 == 3;
+    std::vector<Contact> with, without;
+    const bool deepWith =
+        findContacts(probe, obstacle, h, deep, true, Vec3f::UnitY(), with, &testsWith, &clearance);
+    const bool deepWithout =
+        findContacts(probe, obstacle, h, deep, true, Vec3f::UnitY(), without, &testsWithout);
+    ASSERT_EQ(deepWith, deepWithout) << "sub-step " << step;
+    ASSERT_EQ(with.size(), without.size()) << "sub-step " << step;
+    for (size_t k = 0; k < with.size(); ++k) {
+      const Contact &a = with[k], &b = without[k];
+      ASSERT_EQ(a.particle, b.particle) << "sub-step " << step;
+      ASSERT_EQ(a.triangle, b.triangle);
+      ASSERT_EQ(a.weights, b.weights);
+      ASSERT_EQ(a.normal, b.normal);
+      ASSERT_EQ(a.distance, b.distance);
+    }
+    contacts += long(with.size());
+    deepFound += deepWith ? 1 : 0;
+  }
+  EXPECT_GT(contacts, 48 * 30);  // particles near the surface at every sub-step
+  EXPECT_GT(deepFound, 6);       // and deep ones, found by the deep searches
+  // Most look-ups are skipped once the clearances are known.
+  EXPECT_LT(double(testsWith), 0.75 * double(testsWithout)) << testsWith << " " << testsWithout;
+}
+
 // The look-ups skip a triangle when its lower bound exceeds the distance to beat, so the bound
 // must never exceed the squared distance the exact test computes in float (or a skipped triangle
 // could have been the closest): checked for every triangle of a tilted bunny cage, near the origin

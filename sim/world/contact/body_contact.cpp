@@ -110,8 +110,8 @@ bool insideSurface(const ContactGeometry& obstacle, const Vec3f& p, long& tests)
 }  // namespace
 
 bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle, float h, bool deep,
-                  bool creases, const Vec3f& apart, std::vector<Contact>& out,
-                  long* triangleTests) {
+                  bool creases, const Vec3f& apart, std::vector<Contact>& out, long* triangleTests,
+                  ProbeClearance* clearance) {
   long tests = 0;
   // Bodies more than halfway into each other (each one's box centre within the other's box, the
   // probe's inside the obstacle): pushed through by others, dragged or spawned into each other.
@@ -143,6 +143,10 @@ bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle,
   near.min().array() -= maxExtra;
   near.max().array() += maxExtra;
   const float touch = obstacle.gap + obstacle.margin;
+  if (clearance && clearance->particles.size() != size_t(probe.count))
+    clearance->particles.assign(size_t(probe.count), ProbeClearance::Known{});
+  // What a known distance must exceed a threshold by, for the rounding of bounds and distances.
+  const float tolerance = 4.0f * grid.roundingTolerance() + 1e-3f * grid.reach();
   for (int i = 0; i < probe.count; ++i) {
     const Vec3f p = probe.position(i);
     const bool inBox = deep && obstacle.box.contains(p);
@@ -154,6 +158,12 @@ bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle,
     // no more), so such a particle is left alone — it is far outside, or deeper inside than it
     // can have got in one sub-step (the deep search below handles those).
     const float reach = grid.reach() + extra;
+    ProbeClearance::Known* known = clearance ? &clearance->particles[size_t(i)] : nullptr;
+    if (known) {
+      // A lower bound on its distance to the surface now (negative: none).
+      const float now = known->clearance - (p - known->at).norm() - drift;
+      if (now >= reach + tolerance && (!inBox || (known->outside && now > tolerance))) continue;
+    }
     Closest best;
     best.distanceSquared = reach * reach;
     // The grid and its triangle boxes are from positions up to `drift` old: look that much
@@ -166,6 +176,7 @@ bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle,
     // exact tests were repeats.
     int tested[kRemembered];
     int testedCount = 0;
+    float clearanceSquared = 0;
     grid.forEachNear(
         p, extra + drift, [&] { return bound; },
         [&](int t) {
@@ -176,7 +187,9 @@ bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle,
             const float d = std::sqrt(best.distanceSquared);
             bound = drift > 0.0f ? (d + drift) * (d + drift) : best.distanceSquared;
           }
-        });
+        },
+        known ? &clearanceSquared : nullptr);
+    if (known) *known = {p, best.triangle < 0 ? std::sqrt(clearanceSquared) : 0.0f, false};
     bool deepHit = false;
     if (best.triangle < 0) {
       if (!inBox) continue;
@@ -193,6 +206,8 @@ bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle,
     const bool inside = offset.dot(side) < 0.0f;
     const float distance = std::sqrt(best.distanceSquared);
     if (deepHit) {
+      // Its exact distance now, less the drift: a bound on its distance to the grid's surface.
+      if (known && !inside) *known = {p, std::max(distance - drift, 0.0f), true};
       if (!inside) continue;
       foundDeep = true;
     }

@@ -55,6 +55,25 @@ struct Contact {
   float distance = 0;
 };
 
+// What earlier look-ups of one probe body in one obstacle's grid learned, kept between sub-steps
+// (one build of the grid: the caller clears it when the grid is rebuilt). Per probe particle:
+// where it was, a lower bound on its distance then to the surface as the grid holds it, and
+// whether a deep search found it outside. The distance to a surface changes by at most how far
+// the point and the surface move (the grid's drift bounds the surface's), so while the bound,
+// less the particle's motion and the drift, still exceeds the particle's reach, the look-up
+// would find no triangle in reach and is skipped; and while it stays positive, a particle found
+// outside is still outside, and the deep search is skipped. Most look-ups in a pile are of
+// particles near an obstacle's box but not its surface: 81 % find nothing in the seed-scale scene,
+// and in the large scene the deep searches that find nothing took a third of the detection.
+struct ProbeClearance {
+  struct Known {
+    Vec3f at = Vec3f::Zero();  // the particle's position then (metres)
+    float clearance = 0;       // lower bound on its distance then to the grid's surface (metres)
+    bool outside = false;      // a deep search found it outside the surface then
+  };
+  std::vector<Known> particles;  // #P, or empty: nothing known
+};
+
 // Appends a contact for every particle of `probe` whose signed distance to the obstacle's
 // surface is below obstacle.gap + obstacle.margin, in particle order. Each particle looks as
 // far as the grid's reach plus how far it can have moved relative to the surface in this
@@ -76,6 +95,9 @@ struct Contact {
 // triangle in reach (overlapping starts, fast drags); returns whether it found any inside.
 // triangleTests, when given, grows by the number of point–triangle tests made: at most two per
 // particle and triangle (the grid's look-up visits a triangle once, the deep search once).
+// clearance, when given, is used and updated as ProbeClearance says: the contacts found are the
+// same, only fewer look-ups are made (for closed surfaces that do not cross themselves, where
+// the pseudo-normal tells inside from outside).
 //
 // apart: unit direction in which the probe leaves the obstacle when the two overlap by more than
 // half (each body's box centre inside the other's box and the probe's inside the obstacle): then
@@ -85,6 +107,6 @@ struct Contact {
 // searched every sub-step until it no longer is.
 bool findContacts(const ContactGeometry& probe, const ContactGeometry& obstacle, float h, bool deep,
                   bool creases, const Vec3f& apart, std::vector<Contact>& out,
-                  long* triangleTests = nullptr);
+                  long* triangleTests = nullptr, ProbeClearance* clearance = nullptr);
 
 }  // namespace sb

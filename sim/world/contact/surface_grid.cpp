@@ -14,6 +14,7 @@ void SurfaceGrid::build(const std::vector<mesh::Triangle>& triangles, const floa
   Eigen::AlignedBox3f surfaceBox;
   for (const mesh::Triangle& t : triangles)
     for (int i : t) surfaceBox.extend(Vec3f(x[i], y[i], z[i]));
+  surfaceBox_ = surfaceBox;
   bounds_ = surfaceBox;
   bounds_.min().array() -= reach;
   bounds_.max().array() += reach;

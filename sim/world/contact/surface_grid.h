@@ -51,8 +51,19 @@ class SurfaceGrid {
   // one visit per triangle within the bound, whatever the speeds. (It passed over every gridded
   // triangle there, and a soak whose drags and gravity changes made particles fast spent 500 ms
   // per step on those passes.) An empty grid (no triangle near the region) visits nothing.
+  //
+  // clearanceSquared, when given, is set to a lower bound (m²) on the squared distance from p to
+  // every triangle of the surface at build time, visited or not: outside bounds(), the distance
+  // to the box of all triangles; inside, when the look-up read cells (not the box tree), the
+  // smaller of (reach + lookAhead)² (a triangle not entered in those cells is farther than
+  // that) and the bounds of their triangles; else 0 (no bound).
   template <typename Bound, typename Visit>
-  void forEachNear(const Vec3f& p, float extra, const Bound& bound, const Visit& visit) const;
+  void forEachNear(const Vec3f& p, float extra, const Bound& bound, const Visit& visit,
+                   float* clearanceSquared = nullptr) const;
+
+  // Metres: how far a distance or a bound computed in this grid's coordinates may be off by
+  // float rounding (32 ε times the largest coordinate of the region and the surface).
+  float roundingTolerance() const { return planeTolerance_; }
 
   // A lower bound (m²) on the squared distance from p = (x, y, z, 1) to triangle t at build time,
   // to skip triangles without the exact test: the larger of the squared distances to its
@@ -84,6 +95,7 @@ class SurfaceGrid {
 
  private:
   Eigen::AlignedBox3f bounds_;
+  Eigen::AlignedBox3f surfaceBox_;  // of all triangles at build time, not grown
   float reach_ = 0;
   float lookAhead_ = 0;
   Vec3f origin_ = Vec3f::Zero();
@@ -111,8 +123,14 @@ class SurfaceGrid {
 };
 
 template <typename Bound, typename Visit>
-void SurfaceGrid::forEachNear(const Vec3f& p, float extra, const Bound& bound,
-                              const Visit& visit) const {
+void SurfaceGrid::forEachNear(const Vec3f& p, float extra, const Bound& bound, const Visit& visit,
+                              float* clearanceSquared) const {
+  // Outside bounds(), the distance to the box of all triangles bounds the distance to each.
+  const bool inside = bounds_.contains(p);
+  if (clearanceSquared) {
+    const float outside = inside ? 0.0f : surfaceBox_.squaredExteriorDistance(p);
+    *clearanceSquared = std::isfinite(outside) ? outside : 0.0f;
+  }
   if (allTriangles_.empty()) return;  // also: bounds_ is empty, cellOf has no cell to clamp to
   const Eigen::Array4f p4 = lanes(p);
   auto visitRange = [&](const int* begin, const int* end) {
@@ -149,12 +167,20 @@ void SurfaceGrid::forEachNear(const Vec3f& p, float extra, const Bound& bound,
       });
     return;
   }
+  // Every triangle not entered in the cells read has its box grown by reach + lookAhead apart
+  // from p, as p's own cell is among them (cellOf is monotone), or does not meet bounds() at all.
+  float clearance = (reach_ + lookAhead_) * (reach_ + lookAhead_);
   for (int k = lo.z(); k <= hi.z(); ++k)
     for (int j = lo.y(); j <= hi.y(); ++j)
       for (int i = lo.x(); i <= hi.x(); ++i) {
         const int c = cellIndex(i, j, k);
-        visitRange(cells_.begin(c), cells_.end(c));
+        for (const int* t = cells_.begin(c); t != cells_.end(c); ++t) {
+          const float d2 = distanceLowerBoundSquared(*t, p4);
+          clearance = d2 < clearance ? d2 : clearance;
+          if (!(d2 > bound())) visit(*t);
+        }
       }
+  if (clearanceSquared && inside) *clearanceSquared = clearance;
 }
 
 }  // namespace sb
