@@ -37,9 +37,16 @@ constexpr int kDeepSearchEvery = 8;
 // resting (ContactSolverSettings::restingSpeed); 1 m/s: sub-steps up to 51 ms at |g| = 9.81.
 constexpr float kRestingSpeedLimit = 1.0f;
 
+// m/s: 2|g|h, twice what gravity adds to a velocity in a sub-step of h seconds. A body resting
+// on another meets it at about |g|·h every sub-step, so approaches below this are resting
+// contact, not impacts (restitution threshold, ContactSolverSettings::restingSpeed).
+double restingApproach(const ContactSettings& settings, double h) {
+  return 2.0 * settings.gravity.norm() * h;
+}
+
 // Whether contacts may rest at sub-steps of h seconds: 2|g|h ≤ kRestingSpeedLimit.
 bool contactsCanRest(const ContactSettings& settings, double h) {
-  return 2.0 * settings.gravity.norm() * h <= kRestingSpeedLimit;
+  return restingApproach(settings, h) <= kRestingSpeedLimit;
 }
 
 bool lessKey(const ContactScratch::Warm& a, const ContactScratch::Warm& b) {
@@ -800,7 +807,7 @@ int runSolvePhase(const WorkLayout& layout, const ContactSettings& settings, dou
   // with restitution (restitution.json at 1-s sub-steps reached 10⁹ J). At the shipped
   // 1/240 s, 2|g|h = 0.08 m/s, below the default threshold of 1 m/s.
   const float threshold =
-      std::max(settings.restitutionThreshold, float(2.0 * settings.gravity.norm() * h));
+      std::max(settings.restitutionThreshold, float(restingApproach(settings, h)));
   ContactSolverSettings solver;
   solver.h = float(h);
   solver.restitutionThreshold = threshold;
@@ -810,7 +817,7 @@ int runSolvePhase(const WorkLayout& layout, const ContactSettings& settings, dou
   // at long ones a sub-step's gravity alone is an impact, and particles must be stopped one by
   // one (the seed-scale pile at 1-s sub-steps strayed 0.66–0.84 of a diagonal from its bodies'
   // shapes with resting contacts, 0.6 allowed).
-  solver.restingSpeed = contactsCanRest(settings, h) ? float(2.0 * settings.gravity.norm() * h)
+  solver.restingSpeed = contactsCanRest(settings, h) ? float(restingApproach(settings, h))
                                                      : -std::numeric_limits<float>::infinity();
   solver.up = settings.gravity.squaredNorm() > 0.0
                   ? Vec3f((-settings.gravity.normalized()).cast<float>())
