@@ -227,6 +227,23 @@ TEST(SurfaceGeometry, PseudoNormalSideAgreesWithWindingNumber) {
 // An L-shaped prism, z in [0, 1]: the union of [0, 2] × [0, 1] and [0, 1] × [0, 2] in (x, y),
 // closed and outward. Its reflex edge runs along z through (1, 1), between the faces y = 1
 // (x ≥ 1) and x = 1 (y ≥ 1).
+// An obstacle as findContacts sees it: views of positions x and velocities v (#P × 3) and the
+// surface of s, with its topology and grid; box, gap and margin left to the caller.
+ContactGeometry obstacleView(const Eigen::Matrix<float, Eigen::Dynamic, 3>& x,
+                             const Eigen::Matrix<float, Eigen::Dynamic, 3>& v, const Shape& s,
+                             const mesh::SurfaceTopology& topology, const SurfaceGrid& grid) {
+  ContactGeometry obstacle;
+  for (int a = 0; a < 3; ++a) {
+    obstacle.x[a] = x.col(a).data();
+    obstacle.v[a] = v.col(a).data();
+  }
+  obstacle.count = int(x.rows());
+  obstacle.triangles = &s.triangles;
+  obstacle.topology = &topology;
+  obstacle.grid = &grid;
+  return obstacle;
+}
+
 Shape lShapedPrism() {
   const double outline[6][2] = {{0, 0}, {2, 0}, {2, 1}, {1, 1}, {1, 2}, {0, 2}};  // CCW
   Shape s;
@@ -265,15 +282,7 @@ TEST(BodyContact, ParticleInAConcaveCreaseIsHeldByTheFaceItIsDeepestBehind) {
   SurfaceGrid grid;
   const Eigen::AlignedBox3f region(Vec3f::Constant(-1), Vec3f::Constant(3));
   grid.build(s.triangles, x.col(0).data(), x.col(1).data(), x.col(2).data(), 0.3f, 0.25f, region);
-  ContactGeometry obstacle;
-  for (int a = 0; a < 3; ++a) {
-    obstacle.x[a] = x.col(a).data();
-    obstacle.v[a] = v.col(a).data();
-  }
-  obstacle.count = n;
-  obstacle.triangles = &s.triangles;
-  obstacle.topology = &topology;
-  obstacle.grid = &grid;
+  ContactGeometry obstacle = obstacleView(x, v, s, topology, grid);
   obstacle.box = Eigen::AlignedBox3f(Vec3f::Zero(), Vec3f(2, 2, 1));
   obstacle.gap = 0.01f;
   obstacle.margin = 0.05f;
@@ -345,21 +354,33 @@ TEST(SurfaceGrid, CellHoldsEveryTriangleWithinReach) {
   }
 }
 
+// The bunny's cage at 0.1 m near (3, 1, −2), gridded with a reach of 2 cm, cells of 5 cm and a
+// look-ahead of 3 cm over a region around it.
+struct GriddedBunny {
+  static constexpr float reach = 0.02f, lookAhead = 0.03f;
+  Shape s = bunnyCage(0.1, Vec3(3, 1, -2));
+  Eigen::AlignedBox3f region{Vec3f(2.5f, 0.5f, -2.5f), Vec3f(3.2f, 1.2f, -1.6f)};
+  SurfaceGrid grid;
+  GriddedBunny() {
+    const int n = int(s.points.size());
+    Eigen::Matrix<float, Eigen::Dynamic, 3> x(n, 3);
+    for (int i = 0; i < n; ++i) x.row(i) = s.points[size_t(i)].transpose().cast<float>();
+    grid.build(s.triangles, x.col(0).data(), x.col(1).data(), x.col(2).data(), reach, 0.05f, region,
+               false, lookAhead);
+  }
+};
+
 // With a look-ahead the cells hold every triangle within reach + lookAhead, and a look-up visits
 // every triangle within reach + extra of the point, for extra below the look-ahead (one cell)
 // and above it (several), for points inside the grid's bounds and outside them. (The points are
 // at least the largest extra inside the region, as the Contacts phase grows its regions by how
 // far particles look.)
 TEST(SurfaceGrid, LookAheadKeepsEveryTriangleWithinReachInSight) {
-  const Shape s = bunnyCage(0.1, Vec3(3, 1, -2));
-  const int n = int(s.points.size());
-  Eigen::Matrix<float, Eigen::Dynamic, 3> x(n, 3);
-  for (int i = 0; i < n; ++i) x.row(i) = s.points[size_t(i)].transpose().cast<float>();
-  const float reach = 0.02f, lookAhead = 0.03f;
-  SurfaceGrid grid;
-  const Eigen::AlignedBox3f region(Vec3f(2.5f, 0.5f, -2.5f), Vec3f(3.2f, 1.2f, -1.6f));
-  grid.build(s.triangles, x.col(0).data(), x.col(1).data(), x.col(2).data(), reach, 0.05f, region,
-             false, lookAhead);
+  const GriddedBunny g;
+  const Shape& s = g.s;
+  const SurfaceGrid& grid = g.grid;
+  const Eigen::AlignedBox3f& region = g.region;
+  const float reach = GriddedBunny::reach;
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> u(0, 1);
   const Eigen::AlignedBox3f inner(region.min().array() + 0.07f, region.max().array() - 0.07f);
@@ -397,15 +418,11 @@ TEST(SurfaceGrid, LookAheadKeepsEveryTriangleWithinReachInSight) {
 // points inside and outside the grid's bounds, at every extra (one cell, several cells), and it
 // must mean something: for points away from the surface it exceeds the reach.
 TEST(SurfaceGrid, ClearanceNeverExceedsTheDistanceToAnyTriangle) {
-  const Shape s = bunnyCage(0.1, Vec3(3, 1, -2));
-  const int n = int(s.points.size());
-  Eigen::Matrix<float, Eigen::Dynamic, 3> x(n, 3);
-  for (int i = 0; i < n; ++i) x.row(i) = s.points[size_t(i)].transpose().cast<float>();
-  const float reach = 0.02f, lookAhead = 0.03f;
-  SurfaceGrid grid;
-  const Eigen::AlignedBox3f region(Vec3f(2.5f, 0.5f, -2.5f), Vec3f(3.2f, 1.2f, -1.6f));
-  grid.build(s.triangles, x.col(0).data(), x.col(1).data(), x.col(2).data(), reach, 0.05f, region,
-             false, lookAhead);
+  const GriddedBunny g;
+  const Shape& s = g.s;
+  const SurfaceGrid& grid = g.grid;
+  const Eigen::AlignedBox3f& region = g.region;
+  const float reach = GriddedBunny::reach, lookAhead = GriddedBunny::lookAhead;
   std::mt19937 rng(8);
   std::uniform_real_distribution<float> u(0, 1);
   // Around the region, so that some points are outside the grid's bounds.
@@ -490,15 +507,7 @@ TEST(BodyContact, KnownClearancesSkipLookUpsWithoutChangingTheContacts) {
       x.row(i) = (centre + turn * (Vec3f(gridX.row(i).transpose()) - centre) +
                   Vec3f(0.005f * std::cos(0.5f * float(step)), 0, 0))
                      .transpose();
-    ContactGeometry obstacle;
-    for (int a = 0; a < 3; ++a) {
-      obstacle.x[a] = x.col(a).data();
-      obstacle.v[a] = v.col(a).data();
-    }
-    obstacle.count = n;
-    obstacle.triangles = &s.triangles;
-    obstacle.topology = &topology;
-    obstacle.grid = &grid;
+    ContactGeometry obstacle = obstacleView(x, v, s, topology, grid);
     obstacle.gridDrift = std::sqrt((x - gridX).rowwise().squaredNorm().maxCoeff());
     ASSERT_LT(obstacle.gridDrift, 0.25f * spacing);
     obstacle.box.setEmpty();
