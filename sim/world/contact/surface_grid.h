@@ -133,9 +133,16 @@ void SurfaceGrid::forEachNear(const Vec3f& p, float extra, const Bound& bound, c
   }
   if (allTriangles_.empty()) return;  // also: bounds_ is empty, cellOf has no cell to clamp to
   const Eigen::Array4f p4 = lanes(p);
+  // Every triangle not entered in the cells read has its box grown by reach + lookAhead apart
+  // from p, as p's own cell is among them (cellOf is monotone), or does not meet bounds() at all;
+  // those read lower it to their bounds.
+  float clearance = (reach_ + lookAhead_) * (reach_ + lookAhead_);
   auto visitRange = [&](const int* begin, const int* end) {
-    for (const int* t = begin; t != end; ++t)
-      if (!(distanceLowerBoundSquared(*t, p4) > bound())) visit(*t);
+    for (const int* t = begin; t != end; ++t) {
+      const float d2 = distanceLowerBoundSquared(*t, p4);
+      clearance = d2 < clearance ? d2 : clearance;
+      if (!(d2 > bound())) visit(*t);
+    }
   };
   // Every triangle within reach + extra of p has its grown box (reach + lookAhead) within
   // extra − lookAhead of p, so it is entered in a cell overlapping p ± (extra − lookAhead) and
@@ -167,18 +174,11 @@ void SurfaceGrid::forEachNear(const Vec3f& p, float extra, const Bound& bound, c
       });
     return;
   }
-  // Every triangle not entered in the cells read has its box grown by reach + lookAhead apart
-  // from p, as p's own cell is among them (cellOf is monotone), or does not meet bounds() at all.
-  float clearance = (reach_ + lookAhead_) * (reach_ + lookAhead_);
   for (int k = lo.z(); k <= hi.z(); ++k)
     for (int j = lo.y(); j <= hi.y(); ++j)
       for (int i = lo.x(); i <= hi.x(); ++i) {
         const int c = cellIndex(i, j, k);
-        for (const int* t = cells_.begin(c); t != cells_.end(c); ++t) {
-          const float d2 = distanceLowerBoundSquared(*t, p4);
-          clearance = d2 < clearance ? d2 : clearance;
-          if (!(d2 > bound())) visit(*t);
-        }
+        visitRange(cells_.begin(c), cells_.end(c));
       }
   if (clearanceSquared && inside) *clearanceSquared = clearance;
 }
