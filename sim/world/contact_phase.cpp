@@ -240,7 +240,7 @@ void runSoftImpacts(ContactScratch& scratch, std::vector<SolverBody>& bodies,
     } else {
       // An impact starts where the pair comes within reach while the centres approach fast
       // enough.
-      if (!(-p.before > threshold) || p.normal.isZero()) continue;
+      if (!(-p.before > threshold) || p.normal == Vec3f::Zero()) continue;
       impact.key = p.key;
       impact.normal = p.normal;
       impact.approach = -p.before;
@@ -275,7 +275,7 @@ void runSoftImpacts(ContactScratch& scratch, std::vector<SolverBody>& bodies,
   }
   std::swap(scratch.impacts, next);
   for (int b = 0; b < nb; ++b) {
-    if (change[size_t(b)].isZero()) continue;
+    if (change[size_t(b)] == Vec3f::Zero()) continue;
     SolverBody& body = bodies[size_t(b)];
     const Vec3f dv = change[size_t(b)], dx = h * shift[size_t(b)];
     for (int i = 0; i < body.count; ++i) {
@@ -646,7 +646,7 @@ void resistRolling(ContactScratch& scratch, const std::vector<SolverBody>& bodie
 
   parallelFor(nb, minParallel, [&](int b) {
     const Vec3f dw = scratch.rollingSpinChange[size_t(b)].cast<float>();
-    if (!scratch.rollingTurns[size_t(b)] || dw.isZero()) return;
+    if (!scratch.rollingTurns[size_t(b)] || dw == Vec3f::Zero()) return;
     BodyState& s = slots[size_t(solverSlot[size_t(b)])].state;
     const Vec3f c = scratch.rollingMotion[size_t(b)].centre.cast<float>();
     for (int i = 0; i < s.x.rows(); ++i)

@@ -405,7 +405,7 @@ void runVelocitiesPhase(const WorkLayout& layout, const Vec3& gravity, double h,
                         : rigidMotionOnThreads(columnsOf(s.x), columnsOf(s.v), m.mass.data(), n);
                 const Eigen::Vector3f dw =
                     (rm.inverseInertia * (s.spin - rm.angularMomentum)).cast<float>();
-                if (dw.isZero()) return;
+                if (dw == Eigen::Vector3f::Zero()) return;
                 // v += dw × (x − xc) − shift: no linear momentum in exact arithmetic; the shift,
                 // its mass-weighted mean as evaluated in float, keeps rounding from adding any.
                 // The mean is summed in blocks of kRigidMotionBlock particles, blocks in order.

@@ -6,7 +6,7 @@ namespace sb {
 
 Vec3 rollingCouple(const Mat3& invInertiaA, const Mat3& invInertiaB, const Vec3& relativeSpin,
                    double maxCouple) {
-  if (!(maxCouple > 0.0) || relativeSpin.isZero()) return Vec3::Zero();
+  if (!(maxCouple > 0.0) || relativeSpin == Vec3::Zero()) return Vec3::Zero();
   // K⁺ by eigen-decomposition: K is symmetric positive semi-definite (a flat or a line-shaped
   // body turns freely about some axis: zero there, and no couple is taken along it).
   const Mat3 k = invInertiaA + invInertiaB;
