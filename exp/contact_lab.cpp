@@ -665,6 +665,12 @@ int overlap() {
   for (int k = 1; k <= steps; ++k) {
     w.step();
     peak = std::max(peak, maxSpeed(w));
+    if (num("trace", 0) > 0)
+      std::printf("%.4f max %.3f a v_c %.3f w %.3f | b v_c %.3f w %.3f\n", w.time(), maxSpeed(w),
+                  (w.linearMomentum(ha) / w.mass(ha)).norm(),
+                  w.angularMomentum(ha, w.centreOfMass(ha)).norm(),
+                  (w.linearMomentum(hb) / w.mass(hb)).norm(),
+                  w.angularMomentum(hb, w.centreOfMass(hb)).norm());
     if (sepTime < 0 && deepestPenetration(w, shapes, nullptr) < 0.01) sepTime = w.time();
   }
   std::printf(
@@ -731,7 +737,39 @@ int sceneRun() {
   double lastParticleImpact = 0;
   std::vector<Eigen::MatrixX3f> prevV{size_t(n)};
   const double cpu0 = cpuSeconds();
+  const double plasticUntil = num("plastic_until", 1e30);  // then plasticity off: flow or walk?
   for (int k = 1; k <= steps; ++k) {
+    if (has("late_at") && std::abs(w.time() - num("late_at", 0)) < 0.5 * w.settings().timeStep) {
+      // From here on, other settings: which of them the late motion depends on.
+      WorldSettings late = w.settings();
+      if (has("late_roll")) late.rollingResistance = num("late_roll", 0.05);
+      if (has("late_sub")) late.substeps = int(num("late_sub", 4));
+      if (has("late_bmu")) late.contactFriction = num("late_bmu", 0.5);
+      w.setSettings(late);
+      if (has("late_mu")) {
+        std::vector<Collider> cs = w.colliders();
+        w.clearColliders();
+        for (Collider c : cs) {
+          c.friction = num("late_mu", 0.6);
+          w.addCollider(c);
+        }
+      }
+      if (has("late_damping") || has("late_alpha"))
+        for (BodyHandle b : w.bodies()) {
+          BodyParams p = w.params(b);
+          if (p.mode == Mode::Rigid) continue;
+          if (has("late_damping")) p.damping = num("late_damping", 0.2);
+          if (has("late_alpha")) p.alpha = num("late_alpha", 0.5);
+          w.setParams(b, p);
+        }
+    }
+    if (w.time() >= plasticUntil)
+      for (BodyHandle b : w.bodies()) {
+        BodyParams p = w.params(b);
+        if (!p.plasticity.enabled()) continue;
+        p.plasticity.yield = 1e6;  // no more flow; the permanent deformation stays
+        w.setParams(b, p);
+      }
     w.step();
     const double v = maxSpeed(w);
     peak = std::max(peak, v);
