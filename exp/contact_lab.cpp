@@ -742,7 +742,9 @@ int sceneRun() {
     if (has("late_at") && std::abs(w.time() - num("late_at", 0)) < 0.5 * w.settings().timeStep) {
       // From here on, other settings: which of them the late motion depends on.
       WorldSettings late = w.settings();
+#ifndef LAB_BASELINE
       if (has("late_roll")) late.rollingResistance = num("late_roll", 0.05);
+#endif
       if (has("late_sub")) late.substeps = int(num("late_sub", 4));
       if (has("late_bmu")) late.contactFriction = num("late_bmu", 0.5);
       w.setSettings(late);
