@@ -3,7 +3,10 @@
 // Usage: contact_lab SCENARIO [key=value ...]; threads=N fixes the pool's thread count (runs are
 // bit-identical only for the same N). `scene path=FILE` also takes T= (seconds), sub=, sleep=0|1,
 // nodamp=1, every=, who=1, bodies=1 and spike=1 (after 4 s, every body's fastest particle in
-// each step where one moves ≥ 8 mm/s: which particle pops, and where).
+// each step where one moves ≥ 8 mm/s: which particle pops, and where); late_at=T with late_roll=,
+// late_sub=, late_mu= (colliders), late_bmu= (body–body), late_damping=, late_alpha= (soft bodies)
+// changes those from T on; plastic_until=T stops plastic flow at T, keeping what flowed.
+// `overlap` takes trace=1 (both bodies' speed and spin at every step).
 #include <Eigen/Dense>
 #include <array>
 #include <chrono>
@@ -737,7 +740,7 @@ int sceneRun() {
   double lastParticleImpact = 0;
   std::vector<Eigen::MatrixX3f> prevV{size_t(n)};
   const double cpu0 = cpuSeconds();
-  const double plasticUntil = num("plastic_until", 1e30);  // then plasticity off: flow or walk?
+  const double plasticUntil = num("plastic_until", 1e30);  // then no flow: flow or walk?
   for (int k = 1; k <= steps; ++k) {
     if (has("late_at") && std::abs(w.time() - num("late_at", 0)) < 0.5 * w.settings().timeStep) {
       // From here on, other settings: which of them the late motion depends on.
@@ -768,7 +771,8 @@ int sceneRun() {
     if (w.time() >= plasticUntil)
       for (BodyHandle b : w.bodies()) {
         BodyParams p = w.params(b);
-        if (!p.plasticity.enabled()) continue;
+        // Once: setParams wakes the body, so setting it every step would keep it from sleeping.
+        if (!p.plasticity.enabled() || p.plasticity.yield >= 1e6) continue;
         p.plasticity.yield = 1e6;  // no more flow; the permanent deformation stays
         w.setParams(b, p);
       }
