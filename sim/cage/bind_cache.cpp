@@ -175,8 +175,8 @@ void Embedding::save(const std::string& path, const std::array<std::uint64_t, 2>
       data.append(reinterpret_cast<const char*>(denseD_.data()),
                   sizeof(double) * static_cast<std::size_t>(denseD_.size()));
     } else {
-      for (Eigen::Index k = 0; k < denseF_.size(); ++k)
-        put(data, static_cast<double>(denseF_.data()[k]));
+      for (int i = 0; i < rows_; ++i)
+        for (int j = 0; j < cols_; ++j) put(data, static_cast<double>(panelsF_.at(i, j)));
     }
   }
   put(data, checksum(data));

@@ -165,7 +165,7 @@ void Embedding::swap(Embedding& other) noexcept {
   std::swap(sparse_, other.sparse_);
   std::swap(hasDouble_, other.hasDouble_);
   denseD_.swap(other.denseD_);
-  denseF_.swap(other.denseF_);
+  panelsF_.swap(other.panelsF_);
   sparseD_.swap(other.sparseD_);
   sparseF_.swap(other.sparseF_);
   std::swap(stats_, other.stats_);
@@ -217,7 +217,9 @@ void Embedding::makeFloat() {
     std::transform(sparseD_.valuePtr(), sparseD_.valuePtr() + nnz, sparseF_.valuePtr(),
                    [](double w) { return static_cast<float>(w); });
   } else {
-    denseF_ = denseD_.cast<float>();
+    panelsF_ = PanelWeights(rows_, cols_);
+    for (int i = 0; i < rows_; ++i)
+      for (int j = 0; j < cols_; ++j) panelsF_.at(i, j) = static_cast<float>(denseD_(i, j));
   }
 }
 
@@ -273,27 +275,39 @@ void Embedding::deformWeights(const std::vector<ConstPointsRef>& cages,
   }
   // W streams once, a block of rows at a time, against every cage: bound by the multiply-adds
   // once the block is in cache (deform_kernels.h). Blocks are independent: one range of them
-  // per thread (sim/base/parallel_for.h); 256 rows of a 164-vertex cage are 168 KB.
+  // per thread (sim/base/parallel_for.h); 256 rows of a 164-vertex cage are 168 KB. A row's
+  // result does not depend on the block or on the other cages (deform_kernels.h), so deform and
+  // deformMany agree bit for bit.
   const DeformIsa isa = deformKernelIsa();
-  // A W that fits in cache (a scene body's render mesh: 1.2 MB for the bunny) is taken four
-  // rows at a time, a larger one (streamed from memory) one row at a time: the faster way for
-  // each (deform_kernels.h). Chosen by W alone, so deform and deformMany agree bit for bit.
-  constexpr std::size_t kCachedWeightBytes = std::size_t(4) << 20;
-  const bool cached = std::size_t(rows_) * std::size_t(m) * sizeof(float) <= kCachedWeightBytes;
   constexpr int kBlock = 256;
+  static_assert(kBlock % PanelWeights::kPanelRows == 0);
   const int blocks = (rows_ + kBlock - 1) / kBlock;
+  std::vector<const float*> cagePointers(count);
+  std::vector<float*> outPointers(count);
+  for (size_t k = 0; k < count; ++k) {
+    cagePointers[k] = packed.data() + k * stride;
+    outPointers[k] = outs[k]->data();
+  }
   parallelFor(blocks, count > 1 ? 2 : 8, [&](int b) {
     const int begin = b * kBlock, end = std::min(rows_, begin + kBlock);
-    for (size_t k = 0; k < count; ++k) {
-      const float* c = packed.data() + k * stride;
-      float* o = outs[k]->data();
-      if (sparse_)
-        sparseDeformRows(sparseF_.outerIndexPtr(), sparseF_.innerIndexPtr(), sparseF_.valuePtr(), c,
-                         o, begin, end, isa);
-      else
-        denseDeformRows(denseF_.data(), m, c, c + m, c + 2 * size_t(m), o, begin, end, cached, isa);
+    if (sparse_) {
+      for (size_t k = 0; k < count; ++k)
+        sparseDeformRows(sparseF_.outerIndexPtr(), sparseF_.innerIndexPtr(), sparseF_.valuePtr(),
+                         cagePointers[k], outPointers[k], begin, end, isa);
+    } else {
+      constexpr int kPanels = kBlock / PanelWeights::kPanelRows;
+      panelDeformRows(panelsF_, cagePointers.data(), outPointers.data(), int(count), b * kPanels,
+                      std::min(panelsF_.panels(), (b + 1) * kPanels), isa);
     }
   });
+}
+
+// The float weights as a row-major matrix (deformDouble without double weights).
+Embedding::DenseD Embedding::floatWeights() const {
+  DenseD W(rows_, cols_);
+  for (int i = 0; i < rows_; ++i)
+    for (int j = 0; j < cols_; ++j) W(i, j) = static_cast<double>(panelsF_.at(i, j));
+  return W;
 }
 
 void Embedding::deformDouble(const Eigen::Matrix<double, Eigen::Dynamic, 3>& cagePositions,
@@ -314,7 +328,7 @@ void Embedding::deformDouble(const Eigen::Matrix<double, Eigen::Dynamic, 3>& cag
     if (sparse_)
       out.noalias() = sparseF_.cast<double>() * controls;
     else
-      out.noalias() = denseF_.cast<double>() * controls;
+      out.noalias() = floatWeights() * controls;
   }
 }
 
@@ -330,7 +344,7 @@ void Embedding::rowWeights(int i, std::vector<std::pair<int, double>>& out) cons
     }
   } else {
     for (int j = 0; j < cols_; ++j) {
-      const double v = hasDouble_ ? denseD_(i, j) : static_cast<double>(denseF_(i, j));
+      const double v = hasDouble_ ? denseD_(i, j) : static_cast<double>(panelsF_.at(i, j));
       if (v != 0.0) out.emplace_back(j, v);
     }
   }

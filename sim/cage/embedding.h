@@ -15,6 +15,7 @@
 #include <Eigen/SparseCore>
 
 #include "sim/base/types.h"
+#include "sim/cage/panel_weights.h"
 #include "sim/mesh/triangle_mesh.h"
 
 namespace sb::cage {
@@ -89,7 +90,6 @@ class Embedding {
   using SparseD = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
   using SparseF = Eigen::SparseMatrix<float, Eigen::RowMajor, int>;
   using DenseD = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-  using DenseF = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
   Embedding() = default;
   Embedding(const Embedding&) = default;
@@ -158,6 +158,7 @@ class Embedding {
 
  private:
   void makeFloat();
+  DenseD floatWeights() const;
   // deformMany on positions with one row per column of W.
   void deformWeights(const std::vector<ConstPointsRef>& controls,
                      const std::vector<PointsRowMajor*>& outs) const;
@@ -169,7 +170,7 @@ class Embedding {
   bool sparse_ = false;
   bool hasDouble_ = false;
   DenseD denseD_;
-  DenseF denseF_;
+  PanelWeights panelsF_;  // the float W when dense, in the deform kernels' layout
   SparseD sparseD_;
   SparseF sparseF_;
   BindStats stats_;

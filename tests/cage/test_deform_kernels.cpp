@@ -1,5 +1,6 @@
 // The deform kernels (sim/cage/deform_kernels.h), both instruction sets, against the same sums
-// formed in double: within float rounding of Σ|w|·|c| per row, whichever kernel the CPU picks.
+// formed in double: within float rounding of Σ|w|·|c| per row, whichever kernel the CPU picks;
+// and the dense kernel's promise that a row's bits do not depend on what shares the call.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -71,34 +72,83 @@ void expectClose(const Case& k, const std::vector<float>& out, bool sparse, cons
   }
 }
 
-void checkIsa(DeformIsa isa, bool cached, const char* what) {
-  // Odd sizes: vector remainders in the dense loop, rows left over from its fours (37 = 4·9 + 1,
-  // halves of 18 and 19), and the sparse loop's unrolled tail.
+PanelWeights panelsOf(const Case& k) {
+  PanelWeights P(k.rows, k.m);
+  for (int i = 0; i < k.rows; ++i)
+    for (int j = 0; j < k.m; ++j) P.at(i, j) = k.W[size_t(i) * size_t(k.m) + size_t(j)];
+  return P;
+}
+
+// The dense kernel on `count` copies of the case's cage, each shifted by its index (so a row
+// written for the wrong cage shows), over the panels split in two ranges as the threads call it.
+std::vector<std::vector<float>> densePanels(const Case& k, const PanelWeights& P, int count,
+                                            DeformIsa isa) {
+  std::vector<std::vector<float>> cages(static_cast<size_t>(count)), outs(cages.size());
+  std::vector<const float*> in;
+  std::vector<float*> out;
+  for (int c = 0; c < count; ++c) {
+    for (const std::vector<float>* axis : {&k.X, &k.Y, &k.Z})
+      for (float v : *axis) cages[size_t(c)].push_back(v + float(c));
+    outs[size_t(c)].assign(3 * size_t(k.rows), NAN);
+    in.push_back(cages[size_t(c)].data());
+    out.push_back(outs[size_t(c)].data());
+  }
+  const int half = P.panels() / 2;
+  for (auto [b, e] : {std::pair{0, half}, std::pair{half, P.panels()}})
+    panelDeformRows(P, in.data(), out.data(), count, b, e, isa);
+  return outs;
+}
+
+void checkIsa(DeformIsa isa, const char* what) {
+  // Odd sizes: a last panel part-filled (37 = 16·2 + 5, 300 = 16·18 + 12, 5), ranges that leave
+  // single lane groups over from the lone cage's fours, and the sparse loop's unrolled tail.
   for (const auto& [rows, m] : {std::pair{37, 164}, std::pair{300, 7}, std::pair{5, 1}}) {
     const Case k = makeCase(rows, m, unsigned(rows * 131 + m));
-    std::vector<float> dense(3 * size_t(rows), NAN), sparse(3 * size_t(rows), NAN);
-    // In two ranges, as the threads call it: each row written once, by its range.
+    const PanelWeights P = panelsOf(k);
+    // One cage alone and with others, as every grouping the kernels have (8 + 4 + 1, 8 + 3,
+    // 4 + 3, 4 + 2, 4 + 1).
+    const std::vector<std::vector<float>> one = densePanels(k, P, 1, isa);
+    expectClose(k, one[0], false, what);
+    for (const int count : {13, 11, 7, 6, 5}) {
+      const std::vector<std::vector<float>> many = densePanels(k, P, count, isa);
+      EXPECT_TRUE(many[0] == one[0]) << what << ": cage 0 of " << count << " is not its bits alone";
+      for (int c = 1; c < count; ++c) {
+        Case shifted = k;
+        for (std::vector<float>* axis : {&shifted.X, &shifted.Y, &shifted.Z})
+          for (float& v : *axis) v += float(c);
+        expectClose(shifted, many[size_t(c)], false, what);
+      }
+    }
+    std::vector<float> sparse(3 * size_t(rows), NAN);
     const int half = rows / 2;
-    for (auto [b, e] : {std::pair{0, half}, std::pair{half, rows}}) {
-      denseDeformRows(k.W.data(), m, k.X.data(), k.Y.data(), k.Z.data(), dense.data(), b, e, cached,
-                      isa);
+    for (auto [b, e] : {std::pair{0, half}, std::pair{half, rows}})
       sparseDeformRows(k.outer.data(), k.inner.data(), k.values.data(), k.cage4.data(),
                        sparse.data(), b, e, isa);
-    }
-    expectClose(k, dense, false, what);
     expectClose(k, sparse, true, what);
   }
 }
 
 TEST(DeformKernels, BaselineMatchesDoubleSums) {
-  checkIsa(DeformIsa::Baseline, false, "baseline, one row at a time");
-  checkIsa(DeformIsa::Baseline, true, "baseline, four rows at a time");
+  checkIsa(DeformIsa::Baseline, "baseline");
 }
 
 TEST(DeformKernels, WideMatchesDoubleSums) {
-  if (deformKernelIsa() != DeformIsa::Avx2Fma) GTEST_SKIP() << "this CPU has no AVX2 + FMA";
-  checkIsa(DeformIsa::Avx2Fma, false, "AVX2 + FMA, one row at a time");
-  checkIsa(DeformIsa::Avx2Fma, true, "AVX2 + FMA, four rows at a time");
+  if (!deformIsaSupported(DeformIsa::Avx2Fma)) GTEST_SKIP() << "this CPU has no AVX2 + FMA";
+  checkIsa(DeformIsa::Avx2Fma, "AVX2 + FMA");
+}
+
+// 16 lanes: the same fused chains as AVX2, so the same bits, for every grouping of cages.
+TEST(DeformKernels, Avx512MatchesDoubleSumsAndAvx2BitForBit) {
+  if (!deformIsaSupported(DeformIsa::Avx512)) GTEST_SKIP() << "this CPU has no AVX-512";
+  checkIsa(DeformIsa::Avx512, "AVX-512");
+  for (const auto& [rows, m] : {std::pair{37, 164}, std::pair{300, 7}}) {
+    const Case k = makeCase(rows, m, unsigned(rows * 7 + m));
+    const PanelWeights P = panelsOf(k);
+    for (const int count : {1, 3, 4, 9, 13})
+      EXPECT_TRUE(densePanels(k, P, count, DeformIsa::Avx512) ==
+                  densePanels(k, P, count, DeformIsa::Avx2Fma))
+          << rows << " rows, " << count << " cages";
+  }
 }
 
 }  // namespace
