@@ -38,10 +38,18 @@ wait_for_frame() {
   done
 }
 
+# copy_stats STATS OUT: copies the stats file the viewer is rewriting. The viewer replaces it
+# by renaming a new file over it; cp noticed that mid-copy now and then and skipped the file
+# ("replaced while being copied", a flaky failure), while one open descriptor reads one whole
+# version.
+copy_stats() {
+  cat "$1" >"$2" || fail "cannot copy $1"
+}
+
 # snapshot STATS N OUT: waits for frame >= N and copies the stats file to OUT.
 snapshot() {
   wait_for_frame "$1" "$2"
-  cp "$1" "$3"
+  copy_stats "$1" "$3"
 }
 
 # start_live_viewer STATS [OPTION...]: starts the viewer on the test's scene in the background,

@@ -50,7 +50,7 @@ screenshot() {
   done
   sleep 0.2  # written by the viewer in one go, but give the rename a moment
   cp softbody_screenshot.png "$1.png"
-  cp "$live" "$1.json"
+  copy_stats "$live" "$1.json"
 }
 
 [ "$(get /bodies/0/embedding/method)" = mvc ] || fail "body 0 does not start with mvc"
@@ -117,7 +117,7 @@ screenshot "$WORK/folds"
 
 # ---- 4. a surface drag on the lattice body ----
 next_frames "$live" 30
-cp "$live" "$WORK/lattice_before.json"
+copy_stats "$live" "$WORK/lattice_before.json"
 read -r x y < <("$CHECK" grab-pixel "$WORK/lattice_before.json" 2) || fail "no pixel hits the lattice body"
 echo "grabbing the lattice body at pixel $x,$y"
 xdotool mousemove "$x" "$y"
@@ -128,7 +128,7 @@ for step in $(seq 1 8); do
   sleep 0.05
 done
 next_frames "$live" 40
-cp "$live" "$WORK/lattice_held.json"
+copy_stats "$live" "$WORK/lattice_held.json"
 xdotool mouseup 1
 held() { "$CHECK" get "$WORK/lattice_held.json" "$1"; }
 [ "$(held /drag/active)" = true ] || fail "no active drag while the button was held"

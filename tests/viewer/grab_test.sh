@@ -14,7 +14,7 @@ start_live_viewer "$WORK/live.json"
 snapshot "$WORK/live.json" 150 "$WORK/fallen.json"
 xdotool key space
 next_frames "$WORK/live.json" 10
-cp "$WORK/live.json" "$WORK/paused.json"
+copy_stats "$WORK/live.json" "$WORK/paused.json"
 [ "$("$CHECK" get "$WORK/paused.json" /paused)" = true ] || fail "space did not pause"
 count=$("$CHECK" get "$WORK/paused.json" /bodyCount)
 found=0
@@ -28,7 +28,7 @@ for ((b = 0; b < count; b++)); do
   # later write, not necessarily the next one.
   for try in $(seq 1 10); do
     next_frames "$WORK/live.json" 3
-    cp "$WORK/live.json" "$WORK/held$b.json"
+    copy_stats "$WORK/live.json" "$WORK/held$b.json"
     [ "$("$CHECK" get "$WORK/held$b.json" /drag/active)" = true ] && break
   done
   xdotool mouseup 1

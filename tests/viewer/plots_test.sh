@@ -41,7 +41,7 @@ awk -v e="$early" 'BEGIN { exit !(e > 0) }' || fail "no kinetic energy plotted w
 
 next_frames "$live" 30
 xwd -root -silent | convert xwd:- "$WORK/plots.png"
-cp "$live" "$WORK/plots.json"
+copy_stats "$live" "$WORK/plots.json"
 "$CHECK" plotted "$WORK/plots.png" "$WORK/plots.json" plotKinetic || fail "no line in the kinetic-energy plot"
 
 # Every body asleep (the default scene rests within ~5 s): nothing moves, exactly 0 J; the

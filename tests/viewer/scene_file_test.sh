@@ -20,7 +20,7 @@ click_widget "$live" scenePath
 replace_text "$WORK/bad_scene.json"
 click_widget "$live" open
 next_frames "$live" 5
-cp "$live" "$WORK/after_open.json"
+copy_stats "$live" "$WORK/after_open.json"
 error=$("$CHECK" get "$WORK/after_open.json" /error)
 echo "error shown: $error"
 case "$error" in
