@@ -85,8 +85,9 @@ __attribute__((always_inline)) inline void groupRows(const PanelWeights& W,
   int k = 0;
   for (; k + Many <= count; k += Many)
     for (int g = begin; g < end; ++g) groupBlock<V, 1, Many>(W, g, cages + k, outs + k);
-  for (; k + 4 <= count; k += 4)
-    for (int g = begin; g < end; ++g) groupBlock<V, 1, 4>(W, g, cages + k, outs + k);
+  if constexpr (Many > 4)
+    for (; k + 4 <= count; k += 4)
+      for (int g = begin; g < end; ++g) groupBlock<V, 1, 4>(W, g, cages + k, outs + k);
   const int left = count - k;
   if (left == 3) {
     for (int g = begin; g < end; ++g) groupBlock<V, 1, 3>(W, g, cages + k, outs + k);
