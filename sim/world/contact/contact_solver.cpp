@@ -728,6 +728,7 @@ void solveIsland(std::vector<SolverBody>& bodies, std::vector<ContactPoint>& poi
     // Each contact goes with the higher of its two bodies (static contacts with their body).
     std::vector<int> rank(bodies.size(), -1);
     for (size_t r = 0; r < levels.size(); ++r) rank[size_t(levels[r])] = int(r);
+    const int levelCount = static_cast<int>(levels.size());
     std::vector<std::vector<int>> atLevel(levels.size());
     for (int k : pointList) {
       const ContactPoint& c = points[size_t(k)];
@@ -735,17 +736,61 @@ void solveIsland(std::vector<SolverBody>& bodies, std::vector<ContactPoint>& poi
       const int ro = c.obstacle >= 0 ? rank[size_t(c.obstacle)] : -1;
       atLevel[size_t(std::max(rp, ro))].push_back(k);
     }
-    for (size_t level = 0; level < levels.size(); ++level) {
-      SolverBody& body = bodies[size_t(levels[level])];
-      if (!atLevel[level].empty()) {
-        // Effective masses with what is below frozen.
-        for (int k : atLevel[level]) {
-          ContactPoint& c = points[size_t(k)];
-          computeInverseMasses(probeSide(bodies, c), obstacleSide(bodies, c), c);
-        }
-        for (int k : atLevel[level]) solveContact(bodies, points[size_t(k)], h, false);
+    auto solveLevel = [&](int level) {
+      // Effective masses with what is below frozen.
+      for (int k : atLevel[size_t(level)]) {
+        ContactPoint& c = points[size_t(k)];
+        computeInverseMasses(probeSide(bodies, c), obstacleSide(bodies, c), c);
       }
-      body.frozen = true;
+      for (int k : atLevel[size_t(level)]) solveContact(bodies, points[size_t(k)], h, false);
+      bodies[size_t(levels[size_t(level)])].frozen = true;
+    };
+    // A level's contacts write only its body and read, besides it, only the bodies below that
+    // they touch, which are final (frozen) once their own levels are done. So a level may run as
+    // soon as the levels it touches have: in waves, each level one wave after the latest level it
+    // touches, the levels of a wave (which touch none of each other) at once. Every body then
+    // sees the values it sees in bottom-up order: the same bits for any thread count.
+    std::vector<int> wave(levels.size(), 0);
+    int waves = 0;
+    for (int level = 0; level < levelCount; ++level) {
+      for (int k : atLevel[size_t(level)]) {
+        const ContactPoint& c = points[size_t(k)];
+        const int below =
+            std::min(rank[size_t(c.probe)], c.obstacle >= 0 ? rank[size_t(c.obstacle)] : -1);
+        if (below >= 0)
+          wave[size_t(level)] = std::max(wave[size_t(level)], wave[size_t(below)] + 1);
+      }
+      waves = std::max(waves, wave[size_t(level)] + 1);
+    }
+    // The levels by wave, bottom-up within a wave (a counting sort).
+    std::vector<int> waveStart(size_t(waves) + 1, 0), byWave(levels.size());
+    for (int w : wave) ++waveStart[size_t(w) + 1];
+    for (int w = 0; w < waves; ++w) waveStart[size_t(w) + 1] += waveStart[size_t(w)];
+    std::vector<int> fill(waveStart.begin(), waveStart.end() - 1);
+    for (int level = 0; level < levelCount; ++level)
+      byWave[size_t(fill[size_t(wave[size_t(level)])]++)] = level;
+    for (int w = 0; w < waves; ++w) {
+      const int begin = waveStart[size_t(w)], end = waveStart[size_t(w) + 1];
+      long long visits = 0;
+      for (int i = begin; i < end; ++i)
+        visits += static_cast<long long>(atLevel[size_t(byWave[size_t(i)])].size());
+      if (!parallel || end - begin < 2 || visits < kMinParallelShockWave) {
+        for (int i = begin; i < end; ++i) solveLevel(byWave[size_t(i)]);
+        continue;
+      }
+      // Pieces of about equal contact counts, one per thread.
+      const int threads = threadCount();
+      parallelRanges(threads, 2, threads, [&](int c0, int c1) {
+        long long before = 0;
+        for (int i = begin; i < end; ++i) {
+          const int level = byWave[size_t(i)];
+          const long long mid = 2 * before + static_cast<long long>(atLevel[size_t(level)].size());
+          before += static_cast<long long>(atLevel[size_t(level)].size());
+          // The piece whose share of the visits holds this level's middle.
+          const int piece = int(std::min<long long>(threads - 1, mid * threads / (2 * visits)));
+          if (piece >= c0 && piece < c1) solveLevel(level);
+        }
+      });
     }
     for (int b : bodyList) bodies[size_t(b)].frozen = false;
     for (size_t q = 0; q < pointList.size(); ++q)

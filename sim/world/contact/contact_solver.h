@@ -190,6 +190,9 @@ inline constexpr int kVelocitySweeps = 8;
 // same results; below, the fork per level costs more than the second thread saves. Such an island
 // must be solved outside any parallel loop (inside one, the sweeps run on its thread alone).
 inline constexpr int kMinParallelSweep = 2048;
+// In such an island, a wave of the shock-propagation pass (bodies that touch none of each other)
+// runs on all threads from this many contact visits (a visit is ~0.1–0.2 µs, a fork a few µs).
+inline constexpr int kMinParallelShockWave = 256;
 
 // Solves one island: the bodies `bodyList` (indices into bodies, prepared) and the contacts
 // `pointList` (indices into points, in the order they are swept) that join them. Islands share
