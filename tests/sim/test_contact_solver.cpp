@@ -227,10 +227,10 @@ TEST(ContactSolver, SkippingIdleContactsChangesNothing) {
 }
 
 // A large island's shock-propagation pass runs in waves of bodies that touch none of each other,
-// a wave on all threads (contact_solver.cpp): the results must be the one-thread ones bit for
-// bit. 128 columns of four boxes on the floor, each box's bottom corners 1 cm into what is
-// below it, moving at random: 2,048 contacts (so the sweeps run on both threads too), four waves
-// of 512.
+// a wave on all threads (contact_solver.cpp): the results must be those of one thread, which
+// goes bottom-up, bit for bit. 128 columns of four boxes on the floor, each box's bottom corners
+// 1 cm into what is below it, moving at random: 2,048 contacts (so the sweeps run on both
+// threads too), four waves of 512.
 TEST(ContactSolver, LargeIslandOnTwoThreadsEqualsOneBitForBit) {
   constexpr int kColumns = 128, kHigh = 4;
   static_assert(kColumns * kHigh * 4 >= kMinParallelSweep);

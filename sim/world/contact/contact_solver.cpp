@@ -749,48 +749,54 @@ void solveIsland(std::vector<SolverBody>& bodies, std::vector<ContactPoint>& poi
     // they touch, which are final (frozen) once their own levels are done. So a level may run as
     // soon as the levels it touches have: in waves, each level one wave after the latest level it
     // touches, the levels of a wave (which touch none of each other) at once. Every body then
-    // sees the values it sees in bottom-up order: the same bits for any thread count.
-    std::vector<int> wave(levels.size(), 0);
-    int waves = 0;
-    for (int level = 0; level < levelCount; ++level) {
-      for (int k : atLevel[size_t(level)]) {
-        const ContactPoint& c = points[size_t(k)];
-        const int below =
-            std::min(rank[size_t(c.probe)], c.obstacle >= 0 ? rank[size_t(c.obstacle)] : -1);
-        if (below >= 0)
-          wave[size_t(level)] = std::max(wave[size_t(level)], wave[size_t(below)] + 1);
-      }
-      waves = std::max(waves, wave[size_t(level)] + 1);
-    }
-    // The levels by wave, bottom-up within a wave (a counting sort).
-    std::vector<int> waveStart(size_t(waves) + 1, 0), byWave(levels.size());
-    for (int w : wave) ++waveStart[size_t(w) + 1];
-    for (int w = 0; w < waves; ++w) waveStart[size_t(w) + 1] += waveStart[size_t(w)];
-    std::vector<int> fill(waveStart.begin(), waveStart.end() - 1);
-    for (int level = 0; level < levelCount; ++level)
-      byWave[size_t(fill[size_t(wave[size_t(level)])]++)] = level;
-    for (int w = 0; w < waves; ++w) {
-      const int begin = waveStart[size_t(w)], end = waveStart[size_t(w) + 1];
-      long long visits = 0;
-      for (int i = begin; i < end; ++i)
-        visits += static_cast<long long>(atLevel[size_t(byWave[size_t(i)])].size());
-      if (!parallel || end - begin < 2 || visits < kMinParallelShockWave) {
-        for (int i = begin; i < end; ++i) solveLevel(byWave[size_t(i)]);
-        continue;
-      }
-      // Pieces of about equal contact counts, one per thread.
-      const int threads = threadCount();
-      parallelRanges(threads, 2, threads, [&](int c0, int c1) {
-        long long before = 0;
-        for (int i = begin; i < end; ++i) {
-          const int level = byWave[size_t(i)];
-          const long long mid = 2 * before + static_cast<long long>(atLevel[size_t(level)].size());
-          before += static_cast<long long>(atLevel[size_t(level)].size());
-          // The piece whose share of the visits holds this level's middle.
-          const int piece = int(std::min<long long>(threads - 1, mid * threads / (2 * visits)));
-          if (piece >= c0 && piece < c1) solveLevel(level);
+    // sees the values it sees in bottom-up order: the same bits for any thread count. Islands
+    // too small for the sweeps' threads go bottom-up without the waves' bookkeeping.
+    if (!parallel) {
+      for (int level = 0; level < levelCount; ++level) solveLevel(level);
+    } else {
+      std::vector<int> wave(levels.size(), 0);
+      int waves = 0;
+      for (int level = 0; level < levelCount; ++level) {
+        for (int k : atLevel[size_t(level)]) {
+          const ContactPoint& c = points[size_t(k)];
+          const int below =
+              std::min(rank[size_t(c.probe)], c.obstacle >= 0 ? rank[size_t(c.obstacle)] : -1);
+          if (below >= 0)
+            wave[size_t(level)] = std::max(wave[size_t(level)], wave[size_t(below)] + 1);
         }
-      });
+        waves = std::max(waves, wave[size_t(level)] + 1);
+      }
+      // The levels by wave, bottom-up within a wave (a counting sort).
+      std::vector<int> waveStart(size_t(waves) + 1, 0), byWave(levels.size());
+      for (int w : wave) ++waveStart[size_t(w) + 1];
+      for (int w = 0; w < waves; ++w) waveStart[size_t(w) + 1] += waveStart[size_t(w)];
+      std::vector<int> fill(waveStart.begin(), waveStart.end() - 1);
+      for (int level = 0; level < levelCount; ++level)
+        byWave[size_t(fill[size_t(wave[size_t(level)])]++)] = level;
+      for (int w = 0; w < waves; ++w) {
+        const int begin = waveStart[size_t(w)], end = waveStart[size_t(w) + 1];
+        long long visits = 0;
+        for (int i = begin; i < end; ++i)
+          visits += static_cast<long long>(atLevel[size_t(byWave[size_t(i)])].size());
+        if (end - begin < 2 || visits < kMinParallelShockWave) {
+          for (int i = begin; i < end; ++i) solveLevel(byWave[size_t(i)]);
+          continue;
+        }
+        // Pieces of about equal contact counts, one per thread.
+        const int threads = threadCount();
+        parallelRanges(threads, 2, threads, [&](int c0, int c1) {
+          long long before = 0;
+          for (int i = begin; i < end; ++i) {
+            const int level = byWave[size_t(i)];
+            const long long mid =
+                2 * before + static_cast<long long>(atLevel[size_t(level)].size());
+            before += static_cast<long long>(atLevel[size_t(level)].size());
+            // The piece whose share of the visits holds this level's middle.
+            const int piece = int(std::min<long long>(threads - 1, mid * threads / (2 * visits)));
+            if (piece >= c0 && piece < c1) solveLevel(level);
+          }
+        });
+      }
     }
     for (int b : bodyList) bodies[size_t(b)].frozen = false;
     for (size_t q = 0; q < pointList.size(); ++q)
