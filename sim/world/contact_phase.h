@@ -100,8 +100,9 @@ struct ContactScratch {
   std::vector<Body> bodies;  // per slot
   std::vector<Pair> pairs;
   std::vector<std::vector<Contact>> pairContacts;  // per pair
-  std::vector<char> pairDeep;                      // per pair: found deep particles
-  std::vector<long> pairTests;                     // per pair: point–triangle tests made
+  std::vector<int> pairVisitOrder;  // pair indices, the narrow phase's order (by obstacle)
+  std::vector<char> pairDeep;       // per pair: found deep particles
+  std::vector<long> pairTests;      // per pair: point–triangle tests made
   // What each pair's look-ups learned (ProbeClearance), kept while the obstacle's grid is: per
   // pair during a sub-step, then sorted by (probe, obstacle) slots for the next one.
   struct PairClearance {
