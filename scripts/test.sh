@@ -9,8 +9,9 @@
 #                        with this build instead of compiling everything once more);
 #   SOFTBODY_TSAN=1      builds everything (library, app with viewer, tests) with clang and
 #                        ThreadSanitizer into build/tsan, warnings as errors (the second
-#                        compiler: CI's one clang build of everything), and runs all but the
-#                        viewer and soak tests; the results, golden hash included, are GCC's;
+#                        compiler: CI's one clang build of everything) and without precompiled
+#                        headers, and runs all but the viewer and soak tests; the results,
+#                        golden hash included, are GCC's;
 #   SOFTBODY_SOAK=1      also runs the soak tests (CTest label "soak", ~2.5 min on 2 cores;
 #                        CI runs them in its GCC stage, see .ci/run).
 set -euo pipefail
@@ -30,8 +31,11 @@ if [ "${SOFTBODY_SANITIZE:-0}" = 1 ]; then
   export LSAN_OPTIONS="suppressions=$root/scripts/lsan.supp:print_suppressions=0"
 elif [ "${SOFTBODY_TSAN:-0}" = 1 ]; then
   dir="$root/build/tsan"
+  # Without the precompiled headers (CMakeLists.txt, SOFTBODY_PCH): every other build has them,
+  # and a file that forgot an include of Eigen or the standard library compiles there all the
+  # same. This build catches it, for about a minute more of compile time.
   flags=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DSOFTBODY_TSAN=ON
-         -DCMAKE_CXX_COMPILER=clang++)
+         -DCMAKE_CXX_COMPILER=clang++ -DSOFTBODY_PCH=OFF)
   export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:history_size=4:suppressions=$root/scripts/tsan.supp"
   # The Xvfb viewer tests are built but not run here: they time real frames, which TSan's
   # slowdown turns into timeouts. viewer_step_thread (label "threads") does run: the viewer's own
