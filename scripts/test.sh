@@ -33,7 +33,8 @@ elif [ "${SOFTBODY_TSAN:-0}" = 1 ]; then
   dir="$root/build/tsan"
   # Without the precompiled headers (CMakeLists.txt, SOFTBODY_PCH): every other build has them,
   # and a file that forgot an include of Eigen or the standard library compiles there all the
-  # same. This build catches it, for about a minute more of compile time.
+  # same. This build catches it, for about two minutes more of CI (stop 53: 7:21 -> 10:35 for
+  # the stage, part of it a slow phase of the VM).
   flags=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DSOFTBODY_TSAN=ON
          -DCMAKE_CXX_COMPILER=clang++ -DSOFTBODY_PCH=OFF)
   export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:history_size=4:suppressions=$root/scripts/tsan.supp"
