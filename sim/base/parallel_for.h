@@ -5,6 +5,7 @@
 #pragma once
 
 #include <algorithm>
+#include <atomic>
 
 #include "sim/base/parallel.h"
 
@@ -47,6 +48,35 @@ void parallelFor(int count, int minParallel, const Body& body) {
   parallelRanges(count, minParallel, 1 << 30, [&](int begin, int end) {
     for (int i = begin; i < end; ++i) body(i);
   });
+}
+
+// Calls body(i) for i in [0, count) with the items handed out one at a time to whichever thread
+// is free (an atomic counter), for loops whose items differ widely in cost (a contact pair of two
+// large bodies next to one of two pebbles): a fixed cut gave one thread most of the work. Each
+// body(i) must write only what belongs to item i, so the results do not depend on which thread
+// ran it. Runs serially when count is below minParallel.
+template <typename Body>
+void parallelForClaimed(int count, int minParallel, const Body& body) {
+  if (count <= 0) return;
+  const int chunks = std::min(count, threadCount());
+  if (count < minParallel || chunks <= 1) {
+    for (int i = 0; i < count; ++i) body(i);
+    return;
+  }
+  struct Job {
+    const Body* body;
+    int count;
+    std::atomic<int> next{0};
+  } job{&body, count};
+  detail::runChunks(
+      chunks,
+      [](void* ctx, int) {
+        Job& j = *static_cast<Job*>(ctx);
+        for (int i = j.next.fetch_add(1, std::memory_order_relaxed); i < j.count;
+             i = j.next.fetch_add(1, std::memory_order_relaxed))
+          (*j.body)(i);
+      },
+      &job);
 }
 
 }  // namespace sb

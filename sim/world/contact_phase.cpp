@@ -338,7 +338,7 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
   // Static colliders: every particle of an awake body within the margin plus its sub-step's
   // travel of one (per body, in parallel).
   if (!colliders.empty()) {
-    parallelFor(static_cast<int>(order.size()), minParallel, [&](int k) {
+    parallelForClaimed(static_cast<int>(order.size()), minParallel, [&](int k) {
       const int s = order[size_t(k)];
       if (slots[size_t(s)].sleep.asleep) return;
       ContactScratch::Body& cs = contactScratch[size_t(s)];
@@ -435,14 +435,9 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
   }
 
   // Each obstacle's grid covers only where its probes' particles are.
-  std::vector<int>& obstacles = scratch.obstacles;
-  obstacles.clear();
   for (const ContactScratch::Pair& p : contactPairs) {
     ContactScratch::Body& cs = contactScratch[size_t(p.obstacle)];
-    if (!cs.obstacle) {
-      obstacles.push_back(p.obstacle);
-      cs.region.setEmpty();
-    }
+    if (!cs.obstacle) cs.region.setEmpty();
     cs.obstacle = true;
     // As far as a probe particle looks beyond the base reach (findContacts: h·(|v − v̄ₒ| +
     // the obstacle's fastest relative speed), with |v̄ₒ| ≤ speed and relative speeds ≤ 2·speed).
@@ -456,8 +451,9 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
   for (int s : order)
     if (contactScratch[size_t(s)].involved)
       prepareGeometry(slots[size_t(s)], float(h), contactScratch[size_t(s)]);
-  parallelFor(static_cast<int>(obstacles.size()), minParallel, [&](int k) {
-    const int s = obstacles[size_t(k)];
+  // An obstacle's grid, over the region its probes' particles look into (built by the thread
+  // that then runs the obstacle's pairs, below).
+  auto buildGrid = [&](int s) {
     const BodyModel& m = *slots[size_t(s)].model;
     ContactScratch::Body& cs = contactScratch[size_t(s)];
     const MatX3f& x = slots[size_t(s)].sleep.asleep ? cs.detectX : slots[size_t(s)].state.x;
@@ -483,12 +479,13 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
       drift = 0;
     }
     cs.geometry.gridDrift = drift;
-  });
+  };
 
-  // Each pair's clearances from the last sub-step, if its obstacle's grid is the same.
+  // A pair's clearances from the last sub-step, if its obstacle's grid is the same (after that
+  // grid's build). Keys are unique, so each pair swaps with its own old entry.
   std::vector<ContactScratch::PairClearance>& clearances = scratch.clearancesNext;
   clearances.resize(contactPairs.size());
-  for (size_t k = 0; k < contactPairs.size(); ++k) {
+  auto carryClearances = [&](size_t k) {
     ContactScratch::PairClearance& c = clearances[k];
     c.key = {contactPairs[k].probe, contactPairs[k].obstacle};
     c.gridBuiltAt = contactScratch[size_t(c.key.second)].gridBuiltAt;
@@ -500,9 +497,10 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
       std::swap(c.probe, last->probe);
     else
       c.probe.particles.clear();
-  }
+  };
 
-  // Narrow phase reads only, so pairs run in parallel.
+  // Narrow phase: each pair reads both bodies and its obstacle's grid and writes only its own
+  // slot, so pairs run in parallel in any order.
   std::vector<std::vector<Contact>>& pairContacts = scratch.pairContacts;
   pairContacts.resize(contactPairs.size());
   scratch.pairDeep.assign(contactPairs.size(), 0);
@@ -512,8 +510,7 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
   // Pairs are looked at obstacle by obstacle (each obstacle's probes in pair order), so that an
   // obstacle's grid, triangle bounds and positions are still in cache for its next probe. In pair
   // order the other pairs in between evicted them: the seed-scale pile's contact phase took 5-8 %
-  // longer (the large scene's, whose grids all fit in cache, the same). Each pair writes only its
-  // own slot, so the order changes no result.
+  // longer (the large scene's, whose grids all fit in cache, the same).
   std::vector<int>& visitOrder = scratch.pairVisitOrder;
   visitOrder.resize(contactPairs.size());
   for (size_t k = 0; k < visitOrder.size(); ++k) visitOrder[k] = int(k);
@@ -521,8 +518,7 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
     const int x = contactPairs[size_t(a)].obstacle, y = contactPairs[size_t(b)].obstacle;
     return x != y ? x < y : a < b;
   });
-  parallelFor(static_cast<int>(contactPairs.size()), minParallel, [&](int visit) {
-    const int k = visitOrder[size_t(visit)];
+  auto visitPair = [&](int k) {
     const ContactScratch::Pair& p = contactPairs[size_t(k)];
     pairContacts[size_t(k)].clear();
     if (slots[size_t(p.probe)].sleep.asleep && slots[size_t(p.obstacle)].sleep.asleep) return;
@@ -548,6 +544,25 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
     const Vec3f shift = probe.frameShift - obstacle.frameShift;
     if (shift != Vec3f::Zero())
       for (Contact& c : found) c.distance -= c.normal.dot(shift);
+  };
+  // One obstacle at a time per thread: its grid, then its pairs. The obstacles go to whichever
+  // thread is free (parallelForClaimed), since they differ widely in cost (a grid rebuilt or
+  // kept, one probe or twenty): cut in two fixed halves, one thread waited for the other
+  // (measured in docs/design.md §5.5).
+  std::vector<int>& groups = scratch.obstacleVisits;
+  groups.clear();
+  for (size_t v = 0; v < visitOrder.size(); ++v)
+    if (v == 0 || contactPairs[size_t(visitOrder[v])].obstacle !=
+                      contactPairs[size_t(visitOrder[v - 1])].obstacle)
+      groups.push_back(int(v));
+  groups.push_back(int(visitOrder.size()));
+  parallelForClaimed(int(groups.size()) - 1, minParallel, [&](int g) {
+    const int begin = groups[size_t(g)], end = groups[size_t(g) + 1];
+    buildGrid(contactPairs[size_t(visitOrder[size_t(begin)])].obstacle);
+    for (int v = begin; v < end; ++v) {
+      carryClearances(size_t(visitOrder[size_t(v)]));
+      visitPair(visitOrder[size_t(v)]);
+    }
   });
   scratch.deepPairs.clear();
   for (size_t k = 0; k < contactPairs.size(); ++k) {
@@ -846,7 +861,8 @@ int runSolvePhase(const WorkLayout& layout, const ContactSettings& settings, dou
     solveIsland(bodies, points, scratch.islandBodies[size_t(i)], scratch.islandPoints[size_t(i)],
                 colliders, solver);
   };
-  parallelFor(static_cast<int>(small.size()), minParallel, [&](int k) { solve(small[size_t(k)]); });
+  parallelForClaimed(static_cast<int>(small.size()), minParallel,
+                     [&](int k) { solve(small[size_t(k)]); });
   for (int i : large) solve(i);
   parallelFor(nb, minParallel, [&](int b) {
     if (!bodies[size_t(b)].immovable) finishSolverBody(bodies[size_t(b)]);

@@ -101,6 +101,7 @@ struct ContactScratch {
   std::vector<Pair> pairs;
   std::vector<std::vector<Contact>> pairContacts;  // per pair
   std::vector<int> pairVisitOrder;  // pair indices, the narrow phase's order (by obstacle)
+  std::vector<int> obstacleVisits;  // where each obstacle's run in pairVisitOrder starts, + end
   std::vector<char> pairDeep;       // per pair: found deep particles
   std::vector<long> pairTests;      // per pair: point–triangle tests made
   // What each pair's look-ups learned (ProbeClearance), kept while the obstacle's grid is: per
@@ -118,7 +119,7 @@ struct ContactScratch {
   // (ContactPoint::idleSlack).
   long sweepVisits = 0, skippedVisits = 0;
   // Bodies in sweep order, grown boxes and creation rank per slot, obstacle slots.
-  std::vector<int> sweep, rank, obstacles;
+  std::vector<int> sweep, rank;
   std::vector<Eigen::AlignedBox3f> boxes;
   // Deep search: sub-steps counted, and the (probe, obstacle) slot pairs that found deep
   // particles at the last sub-step (sorted).
