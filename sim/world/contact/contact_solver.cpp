@@ -9,7 +9,7 @@
 
 #include "sim/base/parallel_for.h"
 #include "sim/world/contact/friction_cone.h"
-#include "sim/world/contact/sweep_schedule.h"
+#include "sim/world/contact/slab_schedule.h"
 #include "sim/world/mass_properties.h"
 
 namespace sb {
@@ -678,19 +678,24 @@ void solveIsland(std::vector<SolverBody>& bodies, std::vector<ContactPoint>& poi
                  const std::vector<int>& bodyList, const std::vector<int>& pointList,
                  const std::vector<Collider>& colliders, const ContactSolverSettings& settings) {
   const float h = settings.h;
-  // Sweeps in pointList order, on all threads for a large island (the same results).
+  // Sweeps in pointList order; a large island's by slabs, on all threads (slab_schedule.h: an
+  // order that depends only on the island, so the same results for any thread count).
   const int count = static_cast<int>(pointList.size());
-  const bool parallel = count >= kMinParallelSweep && threadCount() > 1;
-  SweepSchedule schedule;
-  if (parallel)
-    schedule.build(count, static_cast<int>(bodies.size()), threadCount(), [&](int q) {
-      const ContactPoint& c = points[size_t(pointList[size_t(q)])];
-      auto writes = [&](int b) { return b >= 0 && !bodies[size_t(b)].immovable ? b : -1; };
-      return std::array<int, 2>{writes(c.probe), writes(c.obstacle)};
-    });
+  const bool large = count >= kMinParallelSweep;
+  const bool parallel = large && threadCount() > 1;
+  SlabSchedule slabs;
+  if (large)
+    slabs.build(
+        count, static_cast<int>(bodies.size()),
+        [&](int q) {
+          const ContactPoint& c = points[size_t(pointList[size_t(q)])];
+          auto writes = [&](int b) { return b >= 0 && !bodies[size_t(b)].immovable ? b : -1; };
+          return std::array<int, 2>{writes(c.probe), writes(c.obstacle)};
+        },
+        [&](int b) { return bodies[size_t(b)].centre; });
   auto sweep = [&](const auto& visit) {
-    if (parallel)
-      schedule.run([&](int q) { visit(points[size_t(pointList[size_t(q)])]); });
+    if (large)
+      slabs.run([&](int q) { visit(points[size_t(pointList[size_t(q)])]); });
     else
       for (int k : pointList) visit(points[size_t(k)]);
   };

@@ -186,9 +186,10 @@ struct ContactSolverSettings {
 // Velocity sweeps over an island's contacts (Gauss–Seidel with accumulated impulses).
 inline constexpr int kVelocitySweeps = 8;
 
-// Islands with at least this many contacts sweep on all threads (sweep_schedule.h), with the
-// same results; below, the fork per level costs more than the second thread saves. Such an island
-// must be solved outside any parallel loop (inside one, the sweeps run on its thread alone).
+// Islands with at least this many contacts sweep in slab order on all threads (slab_schedule.h),
+// with the same results for any thread count; below, in plain order on one thread. Such an
+// island must be solved outside any parallel loop (inside one, the sweeps run on its thread
+// alone).
 inline constexpr int kMinParallelSweep = 2048;
 // In such an island, a wave of the shock-propagation pass (bodies that touch none of each other)
 // runs on all threads from this many contact visits (a visit is ~0.1–0.2 µs, a fork a few µs).
