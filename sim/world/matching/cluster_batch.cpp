@@ -170,6 +170,7 @@ void setBatchShapeLane(ClusterBatchShape& shape, int lane, const Mat3& plastic,
     }
     shape.s0[a][lane] = float(s0[a]);
   }
+  shape.flat[lane] = derived.flat ? 1.0f : 0.0f;
 }
 
 // Compiled twice: for x86-64-v3 (AVX2: one register per vector of eight lanes, twice the
@@ -377,7 +378,11 @@ matchClusterBatch(const ClusterBatch& batch, const ClusterBatchShape& shape,
     for (const F8& v : A.m) size2 += v * v;
     const F8 size = sqrt8(size2);
     // Inverted or flat: no volume to restore, the rotation is the goal (as the general path).
-    const I8 flat = ~(detA > splat(1e-12f) * size * size * size);
+    // A flat cluster's fit is singular, but its float determinant is round-off of either sign:
+    // decided from its rest shape instead. (Tested on the determinant alone, such clusters of a
+    // box's face switched between the rotation and a fit scaled by 1/∛(clamped round-off) from
+    // sub-step to sub-step, and the box's particles shook at ~0.3 m/s for ever.)
+    const I8 flat = ~(detA > splat(1e-12f) * size * size * size) | (load(shape.flat) > half);
     if (params.preserveVolume) {
       const float minScale = float(kMinVolumeScale);  // bounds shared with goalTransform
       const F8 lo = splat(minScale * minScale * minScale);

@@ -48,6 +48,7 @@ struct ClusterBatchShape {
   float AqqInv[9][kBatchLanes];  // (Σ w q qᵀ)⁺ with q = Sᵖ q⁰ (1/kg/m²)
   float S[9][kBatchLanes];       // Sᵖ
   float s0[3][kBatchLanes];      // Sᵖ·rc (m)
+  float flat[kBatchLanes];       // 1: ClusterShape::flat (the linear goal is the rotation), else 0
 };
 
 // Per-step state of the lanes: read as the warm start, written with the result.

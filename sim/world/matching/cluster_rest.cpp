@@ -61,6 +61,7 @@ ClusterShape deriveClusterShape(const ClusterRestModel& rest, const Mat3& plasti
   const Mat3 Aqq = plastic * rest.moments0.topLeftCorner<3, 3>() * plastic.transpose();
   // Float rest positions carry ~1e-7 relative noise: directions weaker than that are flat.
   s.AqqInv = symmetricPseudoInverse<3>(Aqq, 1e-6);
+  s.flat = (s.AqqInv * Aqq).trace() < 2.5;  // the rank the pseudo-inverse kept: 3, 2, 1 or 0
   if (!quadratic) return s;
   s.hasQuadratic = true;
   const double invS = 1.0 / rest.scale;

@@ -35,6 +35,11 @@ struct ClusterRestModel {
 struct ClusterShape {
   bool hasQuadratic = false;   // AqqTildeInv and monoMean are valid
   Mat3 AqqInv = Mat3::Zero();  // (Σ w q qᵀ)⁺, pseudo-inverse: flat/collinear clusters are fine
+  // The members lie on a plane or a line (AqqInv dropped a direction): every linear fit
+  // A = Apq·AqqInv is singular, so it has no volume to restore and the linear goal is the
+  // rotation (goalTransform). Decided here, once, in double: the float batch kernel cannot tell
+  // such a fit's determinant (round-off, either sign) from a small real one.
+  bool flat = false;
   Mat9 AqqTildeInv = Mat9::Zero();  // (Σ w q̃ q̃ᵀ)⁺ with q̃ = [q/s, (mono(q) − mean)/s²]
   Vec6 monoMean = Vec6::Zero();     // mass-weighted mean of mono(q) (m²)
   Mat6 mono = Mat6::Identity();     // mono(Sᵖ q⁰) = mono · mono(q⁰)

@@ -161,9 +161,9 @@ GoalTransform goalTransform(const ClusterFit& fit, const ClusterMoments& m,
       Mat3 A = fit.linear;
       const double det = A.determinant();
       const double size = A.norm();
-      // An inverted or flat fit has no volume to preserve (and no real cube root to take):
-      // the rotation is the only meaningful goal then.
-      if (!(det > 1e-12 * size * size * size)) {
+      // An inverted or flat fit (or a flat cluster: ClusterShape::flat) has no volume to
+      // preserve (and no real cube root to take): the rotation is the only meaningful goal then.
+      if (shape.flat || !(det > 1e-12 * size * size * size)) {
         A = R;
       } else if (params.preserveVolume) {
         // Restoring the volume scales the fit isotropically by 1/∛det. For a cluster crushed
