@@ -31,6 +31,22 @@ struct SmallClusters {
   std::vector<Eigen::Quaterniond> warm;
 };
 
+// Appends a cluster of the given particles (their rest and current positions already in s)
+// with plastic deformation `plastic`, as the World lays it out.
+void addCluster(SmallClusters& s, const std::vector<int>& list, const Mat3& plastic) {
+  s.rest.push_back(buildClusterRest(list.data(), int(list.size()), s.r[0].data(), s.r[1].data(),
+                                    s.r[2].data(), s.w.data()));
+  const Eigen::Vector3f rc = s.rest.back().centre;
+  for (int p : list) {
+    s.members.push_back(p);
+    for (int a = 0; a < 3; ++a) s.memberRest[a].push_back(s.r[a][size_t(p)] - rc[a]);
+    s.memberWeight.push_back(s.w[size_t(p)]);
+  }
+  s.memberStart.push_back(static_cast<int>(s.members.size()));
+  s.plastic.push_back(plastic);
+  s.shape.push_back(deriveClusterShape(s.rest.back(), plastic, false));
+}
+
 // `count` clusters of 1..8 members (mostly 4) over 80 particles. Current positions: a random
 // rotation of a smooth non-affine deformation of the rest shape, so every cluster has its own fit.
 // Some clusters carry a plastic deformation. Warm starts are the previous rotation within ~0.3 rad.
@@ -58,22 +74,12 @@ SmallClusters makeClusters(int count, unsigned seed) {
       const int p = pick(rng);
       if (std::find(list.begin(), list.end(), p) == list.end()) list.push_back(p);
     }
-    s.rest.push_back(buildClusterRest(list.data(), size, s.r[0].data(), s.r[1].data(),
-                                      s.r[2].data(), s.w.data()));
-    const Eigen::Vector3f rc = s.rest.back().centre;
-    for (int p : list) {
-      s.members.push_back(p);
-      for (int a = 0; a < 3; ++a) s.memberRest[a].push_back(s.r[a][size_t(p)] - rc[a]);
-      s.memberWeight.push_back(s.w[size_t(p)]);
-    }
-    s.memberStart.push_back(static_cast<int>(s.members.size()));
     Mat3 plastic = Mat3::Identity();
     if (c % 3 == 1) {
       plastic = Mat3::Identity() + 0.2 * Mat3::Random();
       plastic /= std::cbrt(plastic.determinant());
     }
-    s.plastic.push_back(plastic);
-    s.shape.push_back(deriveClusterShape(s.rest.back(), plastic, false));
+    addCluster(s, list, plastic);
     const int first = list.front();
     s.ref.emplace_back(s.x[0][size_t(first)], s.x[1][size_t(first)], s.x[2][size_t(first)]);
     const Eigen::Quaterniond exact(spin);
@@ -357,17 +363,7 @@ TEST(ClusterBatch, FlatClustersTakeTheRotationAsTheGeneralPathDoes) {
       s.w.push_back(float(0.5 + 0.5 * std::abs(u(rng))));
       list.push_back(s.particles++);
     }
-    s.rest.push_back(buildClusterRest(list.data(), size, s.r[0].data(), s.r[1].data(),
-                                      s.r[2].data(), s.w.data()));
-    const Eigen::Vector3f rc = s.rest.back().centre;
-    for (int p : list) {
-      s.members.push_back(p);
-      for (int a = 0; a < 3; ++a) s.memberRest[a].push_back(s.r[a][size_t(p)] - rc[a]);
-      s.memberWeight.push_back(s.w[size_t(p)]);
-    }
-    s.memberStart.push_back(static_cast<int>(s.members.size()));
-    s.plastic.push_back(Mat3::Identity());
-    s.shape.push_back(deriveClusterShape(s.rest.back(), Mat3::Identity(), false));
+    addCluster(s, list, Mat3::Identity());
     EXPECT_TRUE(s.shape.back().flat) << "cluster " << c;
     s.ref.emplace_back(s.x[0][size_t(list.front())], s.x[1][size_t(list.front())],
                        s.x[2][size_t(list.front())]);
