@@ -16,6 +16,15 @@ namespace sb {
 // predict, velocities, damping, its rigid motion, its fastest speed).
 inline constexpr int kMinParallelParticles = 32768;
 
+// Of `pieces` consecutive shares of equal weight cutting a run of items of total weight `total`,
+// the one that holds the middle of the item whose weight is `weight` and whose predecessors weigh
+// `before` (all ≥ 0, before + weight ≤ total, total > 0): how items of unequal cost are cut into
+// pieces of about equal cost without splitting one, in [0, pieces).
+inline int pieceHoldingMiddle(long long before, long long weight, long long total, int pieces) {
+  const long long twiceMiddle = 2 * before + weight;
+  return int(std::min<long long>(pieces - 1, twiceMiddle * pieces / (2 * total)));
+}
+
 // Calls body(begin, end) on disjoint ranges covering [0, count), at most maxThreads of them
 // (≤ threadCount()) at a time, one contiguous range per thread. Serial (one call) when count is
 // below minParallel.

@@ -1,8 +1,11 @@
-// parallelForClaimed (sim/base/parallel_for.h): every item runs exactly once, whatever the
-// thread count, the item count, or a loop nested inside another.
+// sim/base/parallel_for.h: parallelForClaimed runs every item exactly once, whatever the thread
+// count, the item count, or a loop nested inside another; pieceHoldingMiddle cuts weighted items
+// into pieces in order, each item whole, the pieces' weights close to equal.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cstdlib>
 #include <vector>
 
 #include "sim/base/parallel.h"
@@ -32,6 +35,35 @@ TEST(ParallelForClaimed, NestedLoopsRunEveryItemOnce) {
   });
   setThreadCount(0);
   for (const std::atomic<int>& r : runs) EXPECT_EQ(r.load(), 1);
+}
+
+// Items in order go to pieces in order; each piece's weight is within one item's weight of its
+// share (an item goes to the share that holds its middle, so a piece gains or loses at most half
+// an item at each end); equal items split evenly.
+TEST(PieceHoldingMiddle, CutsWeightedItemsIntoPiecesOfAboutEqualWeight) {
+  const std::vector<long long> weights = {5, 1, 1, 9, 3, 0, 2, 7, 7, 1, 4, 6, 2, 8, 1, 3};
+  long long total = 0, heaviest = 0;
+  for (long long w : weights) {
+    total += w;
+    heaviest = std::max(heaviest, w);
+  }
+  for (int pieces : {1, 2, 3, 8}) {
+    std::vector<long long> load(size_t(pieces), 0);
+    long long before = 0;
+    int last = 0;
+    for (long long w : weights) {
+      const int piece = pieceHoldingMiddle(before, w, total, pieces);
+      ASSERT_GE(piece, last);
+      ASSERT_LT(piece, pieces);
+      load[size_t(piece)] += w;
+      last = piece;
+      before += w;
+    }
+    for (int p = 0; p < pieces; ++p)
+      EXPECT_LE(std::abs(double(load[size_t(p)]) - double(total) / pieces), double(heaviest))
+          << pieces << " pieces, piece " << p;
+  }
+  for (int i = 0; i < 12; ++i) EXPECT_EQ(pieceHoldingMiddle(i, 1, 12, 4), i / 3);
 }
 
 }  // namespace

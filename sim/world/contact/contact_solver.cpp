@@ -793,11 +793,9 @@ void solveIsland(std::vector<SolverBody>& bodies, std::vector<ContactPoint>& poi
           long long before = 0;
           for (int i = begin; i < end; ++i) {
             const int level = byWave[size_t(i)];
-            const long long mid =
-                2 * before + static_cast<long long>(atLevel[size_t(level)].size());
-            before += static_cast<long long>(atLevel[size_t(level)].size());
-            // The piece whose share of the visits holds this level's middle.
-            const int piece = int(std::min<long long>(threads - 1, mid * threads / (2 * visits)));
+            const auto size = static_cast<long long>(atLevel[size_t(level)].size());
+            const int piece = pieceHoldingMiddle(before, size, visits, threads);
+            before += size;
             if (piece >= c0 && piece < c1) solveLevel(level);
           }
         });

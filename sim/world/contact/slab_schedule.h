@@ -92,9 +92,8 @@ void SlabSchedule::build(int count, int bodyCount, const BodiesOf& bodiesOf,
   long long total = 0, before = 0;
   for (int b : written) total += ends[size_t(b)];
   for (int b : written) {
-    const long long mid = 2 * before + ends[size_t(b)];  // twice the ends before its middle
+    slab_[size_t(b)] = pieceHoldingMiddle(before, ends[size_t(b)], total, kSlabs);
     before += ends[size_t(b)];
-    slab_[size_t(b)] = int(std::min<long long>(kSlabs - 1, mid * kSlabs / (2 * total)));
   }
 
   auto binOf = [&](int k) {
@@ -137,9 +136,9 @@ void SlabSchedule::run(const Visit& visit) const {
     parallelRanges(threads, 2, threads, [&](int c0, int c1) {
       for (int b = first; b < last; ++b) {
         // Bin b goes to the thread whose share of the group's items holds its middle.
-        const long long mid =
-            binStart_[size_t(b)] + binStart_[size_t(b) + 1] - 2LL * binStart_[size_t(first)];
-        const int piece = int(std::min<long long>(threads - 1, mid * threads / (2 * items)));
+        const int piece =
+            pieceHoldingMiddle(binStart_[size_t(b)] - binStart_[size_t(first)],
+                               binStart_[size_t(b) + 1] - binStart_[size_t(b)], items, threads);
         if (piece >= c0 && piece < c1) runBins(b, b + 1);
       }
     });
