@@ -84,8 +84,8 @@ struct BodyModel {
   mesh::SurfaceTopology surfaceTopology;
   float spacing = 0;
   Eigen::VectorXf contactInvMass;
-  // Sleep: the body may sleep once every particle has been slower than this for a while (m/s;
-  // scaled to its size, world.cpp).
+  // Sleep: the body may sleep once no particle has moved farther than this speed carries it in
+  // kTimeToSleep, for kTimeToSleep (m/s; scaled to its size, body_model.cpp).
   float sleepSpeed = 0;
   // Rest radius of gyration √(Σ mᵢ|rᵢ|² / M) about the rest centre of mass (m): the body's
   // size as it turns (the reach, rolling resistance's lever).
@@ -137,8 +137,11 @@ void resetBodyState(const BodyModel& model, BodyState& state);
 // it stays an obstacle for awake bodies.
 struct SleepState {
   bool asleep = false;
-  double still = 0;  // seconds every particle has been slower than model.sleepSpeed
-  int island = -1;   // bodies that fell asleep together (one island) wake together
+  // Seconds every particle has stayed within model.sleepSpeed × kTimeToSleep of where it was
+  // when the count started (`anchor`, #P×3, m; empty: start counting at the next sub-step).
+  double still = 0;
+  MatX3f anchor;
+  int island = -1;  // bodies that fell asleep together (one island) wake together
 };
 
 // One entry of the World's body table; handles refer to it by index and generation.

@@ -10,16 +10,19 @@ namespace sb {
 
 namespace {
 
-// max |vᵢ|² (m²/s²) over the rows of v (a maximum: the same bits for any split).
-float fastestSquared(const MatX3f& v) {
-  const int n = static_cast<int>(v.rows());
+// max |xᵢ − aᵢ|² (m²) over the rows of x and a (a maximum: the same bits for any split).
+float farthestSquared(const MatX3f& x, const MatX3f& a) {
+  const int n = static_cast<int>(x.rows());
   const int pieces = std::max(1, std::min(threadCount(), 64));
   float piece[64] = {};
   parallelRanges(pieces, n >= kMinParallelParticles ? 2 : INT32_MAX, 1 << 30, [&](int c0, int c1) {
     for (int c = c0; c < c1; ++c) {
       const int begin = int(1LL * n * c / pieces), end = int(1LL * n * (c + 1) / pieces);
-      piece[c] =
-          end > begin ? v.middleRows(begin, end - begin).rowwise().squaredNorm().maxCoeff() : 0.0f;
+      piece[c] = end > begin ? (x.middleRows(begin, end - begin) - a.middleRows(begin, end - begin))
+                                   .rowwise()
+                                   .squaredNorm()
+                                   .maxCoeff()
+                             : 0.0f;
     }
   });
   return *std::max_element(piece, piece + pieces);
@@ -36,14 +39,19 @@ bool runSleepPhase(double h, bool enabled, std::vector<BodySlot>& slots,
   bool candidate = false;
   for (int s : awake) {
     BodySlot& b = slots[size_t(s)];
-    const float limit = b.model->sleepSpeed;
-    const float fastest2 = fastestSquared(b.state.v);
-    if (fastest2 < limit * limit && !held[size_t(s)]) {
-      b.sleep.still += h;
+    SleepState& sleep = b.sleep;
+    // Still while every particle stays within the distance its sleep speed carries it in
+    // kTimeToSleep of where the count started (Jolt's test, on every particle): a body that
+    // rocks or rings in place by less than that rests, whatever its particles' speeds.
+    const float radius = b.model->sleepSpeed * float(kTimeToSleep);
+    if (held[size_t(s)] || sleep.anchor.rows() != b.state.x.rows() ||
+        farthestSquared(b.state.x, sleep.anchor) > radius * radius) {
+      sleep.anchor = b.state.x;
+      sleep.still = 0;
     } else {
-      b.sleep.still = 0;
+      sleep.still += h;
     }
-    candidate = candidate || b.sleep.still >= kTimeToSleep;
+    candidate = candidate || sleep.still >= kTimeToSleep;
   }
   if (!candidate) return false;
   // Islands of awake bodies: an island sleeps only as a whole.
@@ -78,6 +86,7 @@ bool wakeIsland(std::vector<BodySlot>& slots, const std::vector<int>& order, int
   BodySlot& b = slots[size_t(s)];
   if (!b.sleep.asleep) {
     b.sleep.still = 0;
+    b.sleep.anchor.resize(0, 3);
     return false;
   }
   const int island = b.sleep.island;

@@ -63,10 +63,10 @@ struct WorldSettings {
   // two; docs/design.md §5.5), so bodies rolling or rocking on a rounded part come to rest; a
   // ball stays put on slopes below about atan(c). 0: contacts exert no couple.
   double rollingResistance = 0.05;
-  // Bodies at rest sleep: a body whose particles have all been slower than its sleep speed
-  // (5 % of its size per second, at most 5 cm/s) for 0.5 s, together with every body it
-  // touches, skips the whole step until something wakes it (an awake body touching it, a drag,
-  // a force, setParams/setClusters/setState, a collider or settings change).
+  // Bodies at rest sleep: a body none of whose particles has strayed farther than its sleep
+  // speed (5 % of its size per second, at most 5 cm/s) carries it in 0.5 s, for 0.5 s, together
+  // with every body it touches, skips the whole step until something wakes it (an awake body
+  // touching it, a drag, a force, setParams/setClusters/setState, a collider or settings change).
   bool sleep = true;
 };
 
