@@ -2,11 +2,12 @@
 // the product: built only with -DSOFTBODY_BUILD_EXP=ON (exp/CMakeLists.txt).
 // Usage: contact_lab SCENARIO [key=value ...]; threads=N fixes the pool's thread count (runs are
 // bit-identical only for the same N). `scene path=FILE` also takes T= (seconds), sub=, sleep=0|1,
-// nodamp=1, every=, who=1, bodies=1 and spike=1 (after 4 s, every body's fastest particle in
-// each step where one moves ≥ 8 mm/s: which particle pops, and where); late_at=T with late_roll=,
-// late_sub=, late_mu= (colliders), late_bmu= (body–body), late_damping=, late_alpha= (soft bodies)
-// changes those from T on; plastic_until=T stops plastic flow at T, keeping what flowed.
-// `overlap` takes trace=1 (both bodies' speed and spin at every step).
+// nodamp=1, every=, who=1, bodies=1 (or track=NAME: the bodies whose names hold NAME) and spike=1
+// (after 4 s, every body's fastest particle in each step where one moves ≥ 8 mm/s: which particle
+// pops, and where); late_at=T with late_roll=, late_sub=, late_mu= (colliders), late_bmu=
+// (body–body), late_damping=, late_alpha= (soft bodies) changes those from T on; plastic_until=T
+// stops plastic flow at T, keeping what flowed. `overlap` takes trace=1 (both bodies' speed and
+// spin at every step).
 #include <Eigen/Dense>
 #include <array>
 #include <chrono>
@@ -830,8 +831,10 @@ int sceneRun() {
                     vc.x(), vc.y(), vc.z(), c.x(), c.y(), c.z());
       }
       std::printf("\n");
-      if (num("bodies", 0) > 0)  // every body: asleep, centre, lowest particle, fastest particle
+      if (num("bodies", 0) > 0 || !str("track", "").empty())  // asleep, centre, lowest, fastest
         for (BodyHandle b : bs) {
+          if (!str("track", "").empty() && w.name(b).find(str("track", "")) == std::string::npos)
+            continue;
           const Vec3 c = w.centreOfMass(b);
           std::printf("    %-12s %s c (%.5f %.5f %.5f) lowest %.5f fastest %.3g", w.name(b).c_str(),
                       w.isSleeping(b) ? "asleep" : "awake ", c.x(), c.y(), c.z(),
