@@ -1,6 +1,7 @@
 #include "sim/world/collider.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -99,6 +100,51 @@ double colliderDistance(const Collider& c, const Vec3& p, Vec3* normal) {
   }
   *normal = Vec3::UnitY();
   return 1.0;
+}
+
+namespace {
+
+// Whether the surface point q of collider `index` lies inside another collider deeper than p.
+bool buried(const std::vector<Collider>& colliders, int index, const Vec3& p, const Vec3& q) {
+  constexpr double kTolerance = 1e-6;  // metres: round-off of points on a shared surface
+  for (int j = 0; j < static_cast<int>(colliders.size()); ++j) {
+    if (j == index) continue;
+    Vec3 n;
+    const double atQ = colliderDistance(colliders[size_t(j)], q, &n);
+    if (atQ < 0.0 &&
+        atQ < std::min(0.0, colliderDistance(colliders[size_t(j)], p, &n)) - kTolerance)
+      return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+bool exposedColliderDistance(const std::vector<Collider>& colliders, int index, const Vec3& p,
+                             double* distance, Vec3* normal) {
+  const Collider& c = colliders[size_t(index)];
+  *distance = colliderDistance(c, p, normal);
+  if (colliders.size() < 2) return true;
+  if (c.shape == Collider::Shape::Box && *distance <= 0.0) {
+    // Inside: the faces in order of depth (q: signed distances to the three face pairs' planes
+    // on p's side, all ≤ 0), the first one not buried.
+    const Vec3 local = c.rotation.transpose() * (p - c.centre);
+    const Vec3 q = local.cwiseAbs() - c.halfExtents;
+    std::array<int, 3> axes = {0, 1, 2};
+    std::stable_sort(axes.begin(), axes.end(), [&](int a, int b) { return q[a] > q[b]; });
+    for (int axis : axes) {
+      Vec3 n = Vec3::Zero();
+      n[axis] = local[axis] >= 0.0 ? 1.0 : -1.0;
+      const Vec3 world = c.rotation * n;
+      if (!buried(colliders, index, p, p - q[axis] * world)) {
+        *distance = q[axis];
+        *normal = world;
+        return true;
+      }
+    }
+    return true;  // every way out is buried: the nearest face, as colliderDistance gives
+  }
+  return !buried(colliders, index, p, p - *distance * *normal);
 }
 
 double colliderDistanceLowerBound(const Collider& c, const Eigen::AlignedBox3d& box) {

@@ -3,6 +3,7 @@
 
 #include <Eigen/Geometry>
 #include <string>
+#include <vector>
 
 #include "sim/base/types.h"
 
@@ -40,6 +41,18 @@ const char* colliderShapeName(Collider::Shape shape);
 // Signed distance from p to the collider surface (negative inside) and the outward surface
 // normal at the closest point. Pure function; used by the Collide phase and the tests.
 double colliderDistance(const Collider& collider, const Vec3& p, Vec3* normal);
+
+// colliderDistance to collider `index` of a scene's `colliders`, on the part of its surface that
+// is not buried in another of them (docs/design.md §5.5, "Buried faces"): the static solid is
+// their union, and a ramp's end sunk into the floor is no surface a body can rest on. A surface
+// point is buried when it lies deeper inside another collider than p itself does (by more than
+// 1 µm): a particle pressed into the floor beside a wall still meets the wall's side. Inside a
+// box, p leaves through the nearest face that is not buried (the nearest face when all are).
+// Returns false when the closest surface point of a plane, sphere or capsule, or of a box seen
+// from outside, is buried: the other collider's contact holds p there. `colliders` as the
+// World's (vector of colliders), index in [0, size).
+bool exposedColliderDistance(const std::vector<Collider>& colliders, int index, const Vec3& p,
+                             double* distance, Vec3* normal);
 
 // A lower bound on colliderDistance(collider, p) over every p in `box` (metres, world frame),
 // exact for a plane, conservative (possibly −∞ or ≤ 0 when the box reaches into or around the

@@ -361,8 +361,10 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
         const double reach = margin + h * double(st.v.row(p).norm());
         for (int c : near) {
           Vec3 n;
-          const double d = colliderDistance(colliders[size_t(c)], x, &n);
-          if (d < reach) cs.staticHits.push_back({p, c, float(d), n.cast<float>()});
+          double d = colliderDistance(colliders[size_t(c)], x, &n);
+          // Within reach: is the point it meets buried in another collider (rarely asked)?
+          if (d < reach && exposedColliderDistance(colliders, c, x, &d, &n) && d < reach)
+            cs.staticHits.push_back({p, c, float(d), n.cast<float>()});
         }
       }
     });

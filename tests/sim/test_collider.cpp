@@ -1,6 +1,7 @@
 // colliderDistanceLowerBound: what lets the Contacts phase skip a body's per-particle tests
 // against colliders its box is far from. It must never exceed the distance of any point of the
 // box (a skipped collider would then miss a contact), and it must be tight enough to skip.
+// exposedColliderDistance: contacts only with the parts of a collider not buried in another.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -81,6 +82,62 @@ TEST(ColliderBound, WallBoundIsTheGapAlongItsNormal) {
   // Touching or overlapping: nothing to rule out.
   const Eigen::AlignedBox3d touching(Vec3(2.9, 0.0, -0.5), Vec3(3.05, 0.5, 0.5));
   EXPECT_LE(colliderDistanceLowerBound(wall, touching), 0.0);
+}
+
+// A ramp whose lower end is sunk into the floor (slope.json's 40° ramp). A particle at its foot,
+// a little inside it and nearer its sunk end face than its top, is pushed out through the top:
+// up and away from the ramp, not down into the floor. Alone (no floor), the end face is its way
+// out, as colliderDistance says.
+TEST(ExposedColliderDistance, LeavesARampSunkIntoTheFloorThroughItsTop) {
+  const Mat3 tilt = Eigen::AngleAxisd(40 * M_PI / 180, Vec3::UnitZ()).toRotationMatrix();
+  const Collider ramp = Collider::box(Vec3(0, 0.887577, 0), Vec3(1.5, 0.1, 0.4), tilt);
+  const std::vector<Collider> scene = {Collider::plane(Vec3::UnitY(), 0.0), ramp};
+  const Vec3 top = tilt.col(1), end = -tilt.col(0);
+  const Vec3 foot = ramp.centre + 0.1 * top + 1.5 * end;  // where the top meets the end face
+  ASSERT_NEAR(foot.y(), 0.0, 1e-3);
+  const Vec3 p = foot - 0.0003 * top - 0.0002 * end;  // 0.3 mm below the top, 0.2 mm in the end
+  Vec3 n;
+  ASSERT_NEAR(colliderDistance(ramp, p, &n), -0.0002, 1e-9);
+  ASSERT_NEAR(n.dot(end), 1.0, 1e-12);  // alone: out through the end face, down (n.y −0.64)
+  double d;
+  ASSERT_TRUE(exposedColliderDistance(scene, 1, p, &d, &n));
+  EXPECT_NEAR(d, -0.0003, 1e-9);
+  EXPECT_NEAR(n.dot(top), 1.0, 1e-12);
+  EXPECT_GT(n.y(), 0.0);
+  ASSERT_TRUE(exposedColliderDistance({ramp}, 0, p, &d, &n));
+  EXPECT_NEAR(n.dot(end), 1.0, 1e-12);
+}
+
+// A wall standing in the floor: a particle pressed 0.1 mm into the floor and 0.1 mm into the
+// wall's side still meets the side (its exit is no deeper in the floor than the particle), and
+// the floor's contact is untouched.
+TEST(ExposedColliderDistance, KeepsAWallsSideForAParticlePressedIntoTheFloor) {
+  const Collider wall = Collider::box(Vec3(1.1, 1.0, 0), Vec3(0.1, 1.2, 2.0), Mat3::Identity());
+  const std::vector<Collider> scene = {Collider::plane(Vec3::UnitY(), 0.0), wall};
+  const Vec3 p(1.0001, -0.0001, 0.3);
+  double d;
+  Vec3 n;
+  ASSERT_TRUE(exposedColliderDistance(scene, 1, p, &d, &n));
+  EXPECT_NEAR(d, -0.0001, 1e-9);
+  EXPECT_NEAR(n.x(), -1.0, 1e-12);
+  ASSERT_TRUE(exposedColliderDistance(scene, 0, p, &d, &n));
+  EXPECT_NEAR(d, -0.0001, 1e-12);
+  EXPECT_NEAR(n.y(), 1.0, 1e-12);
+}
+
+// A box sunk wholly under the floor has no surface a particle above the floor can meet; a
+// sphere half sunk keeps its upper half, down to the floor.
+TEST(ExposedColliderDistance, BuriedPartsMakeNoContact) {
+  const Collider plank = Collider::box(Vec3(0, -0.3, 0), Vec3(1, 0.1, 1), Mat3::Identity());
+  const Collider ball = Collider::sphere(Vec3(3, 0, 0), 0.5);
+  const std::vector<Collider> scene = {Collider::plane(Vec3::UnitY(), 0.0), plank, ball};
+  double d;
+  Vec3 n;
+  EXPECT_FALSE(exposedColliderDistance(scene, 1, Vec3(0.2, 0.001, 0.1), &d, &n));
+  ASSERT_TRUE(exposedColliderDistance(scene, 2, Vec3(3.6, 0.1, 0), &d, &n));
+  EXPECT_GT(n.y(), 0.0);
+  ASSERT_TRUE(exposedColliderDistance(scene, 2, Vec3(3.52, 0.001, 0), &d, &n));  // at its foot
+  EXPECT_NEAR(d, 0.02, 1e-4);
 }
 
 }  // namespace

@@ -485,7 +485,11 @@ float currentDistance(std::vector<SolverBody>& bodies, const ContactPoint& c,
   const Vec3f xp = correctedPosition(probe, c.particle);
   if (c.obstacle < 0) {
     Vec3 n;
-    return float(colliderDistance(colliders[size_t(c.collider)], xp.cast<double>(), &n));
+    double d;
+    // A point whose nearest surface of this collider is buried is held by the other collider.
+    if (!exposedColliderDistance(colliders, c.collider, xp.cast<double>(), &d, &n))
+      return std::numeric_limits<float>::infinity();
+    return float(d);
   }
   const SolverBody& ob = bodies[size_t(c.obstacle)];
   const mesh::Triangle& tri = (*ob.triangles)[size_t(c.triangle)];
