@@ -362,7 +362,8 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
         for (int c : near) {
           Vec3 n;
           double d = colliderDistance(colliders[size_t(c)], x, &n);
-          // Within reach: is the point it meets buried in another collider (rarely asked)?
+          // Only within reach (the look-up reads the other colliders): is the point it meets
+          // buried in another collider?
           if (d < reach && exposedColliderDistance(colliders, c, x, &d, &n) && d < reach)
             cs.staticHits.push_back({p, c, float(d), n.cast<float>()});
         }
