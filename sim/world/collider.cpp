@@ -122,8 +122,13 @@ bool buried(const std::vector<Collider>& colliders, int index, const Vec3& p, co
 
 bool exposedColliderDistance(const std::vector<Collider>& colliders, int index, const Vec3& p,
                              double* distance, Vec3* normal) {
+  *distance = colliderDistance(colliders[size_t(index)], p, normal);
+  return moveOntoExposedSurface(colliders, index, p, distance, normal);
+}
+
+bool moveOntoExposedSurface(const std::vector<Collider>& colliders, int index, const Vec3& p,
+                            double* distance, Vec3* normal) {
   const Collider& c = colliders[size_t(index)];
-  *distance = colliderDistance(c, p, normal);
   if (colliders.size() < 2) return true;
   if (c.shape == Collider::Shape::Box && *distance <= 0.0) {
     // Inside: the faces in order of depth (q: signed distances to the three face pairs' planes

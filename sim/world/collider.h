@@ -54,6 +54,13 @@ double colliderDistance(const Collider& collider, const Vec3& p, Vec3* normal);
 bool exposedColliderDistance(const std::vector<Collider>& colliders, int index, const Vec3& p,
                              double* distance, Vec3* normal);
 
+// The second half of exposedColliderDistance, for a caller that already has colliderDistance's
+// answer for collider `index` at p in *distance and *normal (the static contact pass computes it
+// for every near collider and asks about burial only within reach): moves it onto the exposed
+// part of the surface and returns as exposedColliderDistance does.
+bool moveOntoExposedSurface(const std::vector<Collider>& colliders, int index, const Vec3& p,
+                            double* distance, Vec3* normal);
+
 // A lower bound on colliderDistance(collider, p) over every p in `box` (metres, world frame),
 // exact for a plane, conservative (possibly −∞ or ≤ 0 when the box reaches into or around the
 // collider) otherwise: a body whose box is farther than its particles' reach from a collider

@@ -364,7 +364,7 @@ void runContactsPhase(const WorkLayout& layout, const ContactSettings& settings,
           double d = colliderDistance(colliders[size_t(c)], x, &n);
           // Only within reach (the look-up reads the other colliders): is the point it meets
           // buried in another collider?
-          if (d < reach && exposedColliderDistance(colliders, c, x, &d, &n) && d < reach)
+          if (d < reach && moveOntoExposedSurface(colliders, c, x, &d, &n) && d < reach)
             cs.staticHits.push_back({p, c, float(d), n.cast<float>()});
         }
       }
