@@ -77,6 +77,7 @@ bool runSleepPhase(double h, bool enabled, std::vector<BodySlot>& slots,
     b.sleep.asleep = true;
     b.sleep.island = islandId[size_t(root)];
     b.state.v.setZero();
+    b.sleep.anchor.resize(0, 3);  // read again only after it wakes, which restarts the count
     fell = true;
   }
   return fell;
