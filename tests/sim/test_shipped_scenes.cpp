@@ -62,12 +62,10 @@ RunLength runLengthOf(const std::string& name) {
       {"restitution", {10.0, true}},  // (8.3 s: the e = 0.9 box bounces until then)
       {"slope", {10.0, true}},        // (1.9 s: the 40° box has slid onto the floor)
       {"stack", {10.0, true}},        // (0.6 s)
-      // The same length under AddressSanitizer since Eigen is inlined there (CMakeLists.txt):
-      // it had been cut to 3 s without the rest check, at 15× the normal build's time.
-      {"pile", {13.0, true}},  // (10.1 s)
+      {"pile", {13.0, true}},         // (10.1 s)
       // 54 bodies still move by more than 1e-3 of a diagonal per step after 14 s (13 s of CPU),
       // so the performance scene is checked while it moves: 3 s covers the fall and the first
-      // contacts of all three layers (all builds; under AddressSanitizer it had been cut to 1 s).
+      // contacts of all three layers.
       {"large", {3.0, false}},
       // The source's scale (issue 13): 384 bodies, 55k particles, ~0.4 s of CPU per step on
       // two threads today, so 1.5 s (the lower layers land and the upper ones fall onto them;
