@@ -4,10 +4,11 @@
 // bit-identical only for the same N). `scene path=FILE` also takes T= (seconds), sub=, sleep=0|1,
 // nodamp=1, every=, who=1, bodies=1 (or track=NAME: the bodies whose names hold NAME) and spike=1
 // (after 4 s, every body's fastest particle in each step where one moves ≥ 8 mm/s: which particle
-// pops, and where); late_at=T with late_roll=, late_sub=, late_mu= (colliders), late_bmu=
-// (body–body), late_damping=, late_alpha= (soft bodies) changes those from T on; plastic_until=T
-// stops plastic flow at T, keeping what flowed. `overlap` takes trace=1 (both bodies' speed and
-// spin at every step).
+// pops, and where), stillness=1 (every `every` steps, which bodies restarted the test of rest and
+// the median rise of the bodies' centres: StillnessCensus); late_at=T with late_roll=, late_sub=,
+// late_mu= (colliders), late_bmu= (body–body), late_damping=, late_alpha= (soft bodies) changes
+// those from T on; plastic_until=T stops plastic flow at T, keeping what flowed. `overlap` takes
+// trace=1 (both bodies' speed and spin at every step).
 #include <Eigen/Dense>
 #include <array>
 #include <chrono>
@@ -15,12 +16,14 @@
 #include <cstdio>
 #include <cstdlib>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "sim/base/parallel.h"
 #include "sim/mesh/mesh_io.h"
 #include "sim/scene/scene.h"
+#include "sim/world/sleep_phase.h"
 #include "sim/world/world.h"
 
 using namespace sb;
@@ -209,6 +212,82 @@ int sleepingCount(const World& w) {
 #endif
   return n;
 }
+// Which bodies keep a pile awake: the test of rest of sleep_phase.h, run once per step on every
+// body whether it sleeps or not (every particle within its sleep speed × kTimeToSleep of where
+// the count started, for kTimeToSleep; the radius from the body's box at the start, as
+// body_model.cpp takes it). report() prints, for the steps since the last report: the bodies
+// not ready, how many restarted their count, the eight that restarted most (with the farthest a
+// particle strayed, in radii), and the median rise of the bodies' centres (mm; a pile at rest
+// neither rises nor sinks). An island sleeps only when none of its bodies restarts for
+// kTimeToSleep.
+class StillnessCensus {
+ public:
+  explicit StillnessCensus(const World& w) : bodies_(w.bodies()) {
+    for (BodyHandle b : bodies_) {
+      const Eigen::MatrixX3f x = w.positions(b);
+      const double diagonal = (x.colwise().maxCoeff() - x.colwise().minCoeff()).norm();
+      Body s;
+      s.radius = std::min(0.05, 0.05 * diagonal) * kTimeToSleep;
+      s.anchor = x;
+      s.height = w.centreOfMass(b).y();
+      body_.push_back(s);
+    }
+  }
+  void observe(const World& w) {
+    for (size_t i = 0; i < bodies_.size(); ++i) {
+      Body& s = body_[i];
+      const Eigen::MatrixX3f x = w.positions(bodies_[i]);
+      const double far = (x - s.anchor).rowwise().norm().maxCoeff();
+      if (far > s.radius) {
+        s.anchor = x;
+        s.still = 0;
+        ++s.restarts;
+        s.farthest = std::max(s.farthest, far / s.radius);
+      } else {
+        s.still += w.settings().timeStep;
+      }
+    }
+  }
+  void report(const World& w) {
+    int notReady = 0;
+    std::vector<std::pair<int, int>> restarted;  // (restarts, body)
+    std::vector<double> rise;
+    for (size_t i = 0; i < bodies_.size(); ++i) {
+      Body& s = body_[i];
+      notReady += s.still < kTimeToSleep ? 1 : 0;
+      if (s.restarts > 0) restarted.push_back({s.restarts, int(i)});
+      const double height = w.centreOfMass(bodies_[i]).y();
+      rise.push_back(height - s.height);
+      s.height = height;
+    }
+    std::nth_element(rise.begin(), rise.begin() + long(rise.size() / 2), rise.end());
+    std::sort(restarted.rbegin(), restarted.rend());
+    std::printf("%6.2f not ready %d, restarted %zu, median rise %+.3f mm:", w.time(), notReady,
+                restarted.size(), rise.empty() ? 0.0 : 1e3 * rise[rise.size() / 2]);
+    for (size_t j = 0; j < std::min<size_t>(restarted.size(), 8); ++j) {
+      const Body& s = body_[size_t(restarted[j].second)];
+      std::printf(" [%s x%d %.1fr]", w.name(bodies_[size_t(restarted[j].second)]).c_str(),
+                  restarted[j].first, s.farthest);
+    }
+    std::printf("\n");
+    for (Body& s : body_) {
+      s.restarts = 0;
+      s.farthest = 0;
+    }
+  }
+
+ private:
+  struct Body {
+    double radius = 0;  // m
+    Eigen::MatrixX3f anchor;
+    double still = 0;   // s
+    double height = 0;  // the centre's height at the last report (m)
+    int restarts = 0;   // since the last report
+    double farthest = 0;
+  };
+  std::vector<BodyHandle> bodies_;
+  std::vector<Body> body_;
+};
 // RMS distance of particles from the centre of mass.
 double rmsSize(const World& w, BodyHandle b) {
   const Eigen::MatrixX3d x = w.positions(b).cast<double>();
@@ -740,6 +819,8 @@ int sceneRun() {
   // rocking body changing pivot; not gravity, spin or sliding).
   double lastParticleImpact = 0;
   std::vector<Eigen::MatrixX3f> prevV{size_t(n)};
+  std::unique_ptr<StillnessCensus> census;
+  if (num("stillness", 0) > 0) census = std::make_unique<StillnessCensus>(w);
   const double cpu0 = cpuSeconds();
   const double plasticUntil = num("plastic_until", 1e30);  // then no flow: flow or walk?
   for (int k = 1; k <= steps; ++k) {
@@ -808,6 +889,10 @@ int sceneRun() {
           (u - prevV[size_t(i)]).rowwise().norm().maxCoeff() > 0.5)
         lastParticleImpact = w.time();
       prevV[size_t(i)] = u;
+    }
+    if (census) {
+      census->observe(w);
+      if (k % every == 0) census->report(w);
     }
     const int sleeping = sleepingCount(w);
     if (sleeping == n && asleepAt < 0) asleepAt = w.time();
